@@ -1,0 +1,72 @@
+#include "core/image_io.h"
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+namespace vl {
+
+float srgbToLinear(float c) {
+    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+
+float linearToSrgb(float c) {
+    return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
+}
+
+namespace {
+
+void writeWith(const std::string& path, const OIIO::ImageSpec& spec, const void* data) {
+    writeAtomically(path, [&](const std::string& temp) {
+        auto out = OIIO::ImageOutput::create(temp);
+        if (!out) throw Error("cannot write " + path + ": " + OIIO::geterror());
+        if (!out->open(temp, spec) || !out->write_image(spec.format, data) || !out->close())
+            throw Error("cannot write " + path + ": " + out->geterror());
+    });
+}
+
+}  // namespace
+
+void writeExr(const Image& image, const std::string& path, const std::vector<std::string>& channelNames) {
+    OIIO::ImageSpec spec(image.width, image.height, image.channels, OIIO::TypeDesc::FLOAT);
+    if (!channelNames.empty()) {
+        if (static_cast<int>(channelNames.size()) != image.channels)
+            throw Error("writeExr: " + path + ": channel name count does not match the image");
+        spec.channelnames = channelNames;
+    }
+    spec.attribute("compression", "zip");
+    writeWith(path, spec, image.pixels.data());
+}
+
+void writePngSrgb(const Image& image, const std::string& path) {
+    const int outChannels = std::min(image.channels, 4);
+    std::vector<uint8_t> bytes(static_cast<size_t>(image.width) * image.height * outChannels);
+    for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x)
+            for (int c = 0; c < outChannels; ++c) {
+                float v = image.at(x, y, c);
+                if (c < 3) v = linearToSrgb(std::max(v, 0.0f));
+                if (!(v >= 0.0f)) v = 0.0f;
+                bytes[(static_cast<size_t>(y) * image.width + x) * outChannels + c] =
+                    static_cast<uint8_t>(std::lround(std::min(v, 1.0f) * 255.0f));
+            }
+    OIIO::ImageSpec spec(image.width, image.height, outChannels, OIIO::TypeDesc::UINT8);
+    writeWith(path, spec, bytes.data());
+}
+
+Image readImage(const std::string& path) {
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) throw InputError("cannot read image " + path + ": " + OIIO::geterror());
+    const OIIO::ImageSpec& spec = in->spec();
+    Image image(spec.width, spec.height, spec.nchannels);
+    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
+        throw InputError("cannot read image " + path + ": " + in->geterror());
+    return image;
+}
+
+}  // namespace vl

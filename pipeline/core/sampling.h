@@ -1,0 +1,54 @@
+// Warps from uniform [0,1)^n to the distributions the integrators need.
+#pragma once
+
+#include "core/math.h"
+
+namespace vl {
+
+// Shirley–Chiu concentric mapping of the unit square to the unit disk.
+VL_HOSTDEV inline vec2 sampleConcentricDisk(vec2 u) {
+    const vec2 o = 2.0f * u - vec2(1.0f);
+    if (o.x == 0.0f && o.y == 0.0f) return vec2(0.0f);
+    float r, theta;
+    if (glm::abs(o.x) > glm::abs(o.y)) {
+        r = o.x;
+        theta = 0.25f * kPi * (o.y / o.x);
+    } else {
+        r = o.y;
+        theta = 0.5f * kPi - 0.25f * kPi * (o.x / o.y);
+    }
+    return r * vec2(glm::cos(theta), glm::sin(theta));
+}
+
+// Cosine-weighted direction about +Z; pdf = cos θ / π.
+VL_HOSTDEV inline vec3 sampleCosineHemisphere(vec2 u) {
+    const vec2 d = sampleConcentricDisk(u);
+    const float z = glm::sqrt(glm::max(0.0f, 1.0f - d.x * d.x - d.y * d.y));
+    return vec3(d.x, d.y, z);
+}
+
+VL_HOSTDEV inline vec3 sampleUniformSphere(vec2 u) {
+    const float z = 1.0f - 2.0f * u.x;
+    const float r = glm::sqrt(glm::max(0.0f, 1.0f - z * z));
+    const float phi = 2.0f * kPi * u.y;
+    return vec3(r * glm::cos(phi), r * glm::sin(phi), z);
+}
+
+// Uniform barycentrics (b1, b2) on a triangle; b0 = 1 - b1 - b2.
+VL_HOSTDEV inline vec2 sampleUniformTriangle(vec2 u) {
+    const float su = glm::sqrt(u.x);
+    return vec2(1.0f - su, u.y * su);
+}
+
+// Tent filter of ERRATA eq. (11): maps ξ ∈ [0,1) to an offset in [-1, 1).
+VL_HOSTDEV inline float sampleTent(float xi) {
+    return 2.0f * xi < 1.0f ? glm::sqrt(2.0f * xi) - 1.0f : 1.0f - glm::sqrt(2.0f - 2.0f * xi);
+}
+
+VL_HOSTDEV inline float powerHeuristic(float pdfA, float pdfB) {
+    const float a = pdfA * pdfA;
+    const float b = pdfB * pdfB;
+    return a + b > 0.0f ? a / (a + b) : 0.0f;
+}
+
+}  // namespace vl

@@ -1,0 +1,122 @@
+// The scene every stage reads: world-space triangle meshes (the node hierarchy already
+// applied), materials, textures, punctual lights and cameras, in glTF's units converted
+// as DESIGN.md states: metres, +Y up, punctual intensity ÷ 683 (W/sr; W/m² for
+// directional lights), emission = emissiveFactor × emissiveStrength as radiance W/(m²·sr).
+#pragma once
+
+#include "core/aabb.h"
+#include "core/image.h"
+#include "core/math.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace vl {
+
+enum class WrapMode { Repeat, ClampToEdge, MirroredRepeat };
+
+struct Texture {
+    std::string name;   // the image's name or URI, for messages
+    Image image;        // RGBA float; colour textures already sRGB-decoded to linear
+    WrapMode wrapS = WrapMode::Repeat;
+    WrapMode wrapT = WrapMode::Repeat;
+    bool nearest = false;  // magnification filter NEAREST; bilinear otherwise
+};
+
+// KHR_texture_transform: uv' = T · R · S · uv.
+struct TextureTransform {
+    vec2 offset{0.0f};
+    vec2 scale{1.0f};
+    float rotation = 0.0f;
+};
+
+struct TextureRef {
+    int texture = -1;  // index into Scene::textures; -1 = none
+    int texCoord = 0;  // which TEXCOORD_n set (0 or 1)
+    TextureTransform transform;
+    bool valid() const { return texture >= 0; }
+};
+
+enum class AlphaMode { Opaque, Mask, Blend };
+
+struct Material {
+    std::string name;
+    vec4 baseColorFactor{1.0f};
+    TextureRef baseColorTexture;
+    vec3 emissiveFactor{0.0f};
+    float emissiveStrength = 1.0f;  // KHR_materials_emissive_strength
+    TextureRef emissiveTexture;
+    AlphaMode alphaMode = AlphaMode::Opaque;
+    float alphaCutoff = 0.5f;
+    bool doubleSided = false;
+    float metallic = 1.0f;
+    float roughness = 1.0f;
+    float transmission = 0.0f;  // KHR_materials_transmission
+    float ior = 1.5f;           // KHR_materials_ior
+
+    vec3 emission() const { return emissiveFactor * emissiveStrength; }
+    bool emissive() const { return maxComponent(emission()) > 0.0f; }
+};
+
+// One glTF primitive instance in world space. Triangles only, counter-clockwise seen from
+// the front (winding already flipped for transforms with a negative determinant).
+struct Mesh {
+    std::string name;          // "<mesh name>/<primitive index>" (node name when the mesh has none)
+    int material = -1;         // index into Scene::materials; -1 = the glTF default material
+    std::vector<vec3> positions;
+    std::vector<vec3> normals;   // unit length, one per position (area-weighted when the file has none)
+    std::vector<vec2> uv0;       // empty when absent
+    std::vector<vec2> uv1;       // empty when absent: the lightmap set
+    std::vector<vec4> colors;    // COLOR_0, empty when absent
+    std::vector<uint32_t> indices;  // 3 per triangle
+
+    size_t triangleCount() const { return indices.size() / 3; }
+};
+
+enum class LightType { Point, Spot, Directional };
+
+struct Light {
+    std::string name;
+    LightType type = LightType::Point;
+    vec3 color{1.0f};
+    float intensity = 1.0f;         // W/sr (point, spot) or W/m² (directional), after ÷ 683
+    float range = 0.0f;             // 0 = infinite
+    float innerConeAngle = 0.0f;    // radians (spot)
+    float outerConeAngle = 0.7853981634f;
+    vec3 position{0.0f};            // world space
+    vec3 direction{0.0f, 0.0f, -1.0f};  // unit, the direction the light travels (node −Z)
+
+    vec3 radiantIntensity() const { return color * intensity; }
+};
+
+struct Camera {
+    std::string name;
+    vec3 position{0.0f};
+    vec3 forward{0.0f, 0.0f, -1.0f};  // unit
+    vec3 up{0.0f, 1.0f, 0.0f};        // unit, orthogonal to forward
+    float yfov = 0.8f;                // radians
+    float aspectRatio = 0.0f;         // width / height; 0 = take it from the image size
+    float apertureRadius = 0.0f;      // thin lens (metres); 0 = pinhole
+    float focusDistance = 1.0f;       // metres along forward
+};
+
+struct Scene {
+    std::string sourcePath;  // the file it came from, for messages
+    std::string name;        // file stem, used for output folders
+    std::vector<Mesh> meshes;
+    std::vector<Material> materials;
+    std::vector<Texture> textures;
+    std::vector<Light> lights;
+    std::vector<Camera> cameras;
+    std::vector<std::string> warnings;  // also printed when raised; repeated in reports
+    size_t degenerateTrianglesDropped = 0;
+
+    Aabb bounds() const;
+    size_t triangleCount() const;
+    bool hasEmitters() const;  // any triangle with an emissive material
+    // The material of a mesh; the glTF default material for -1.
+    const Material& materialOf(const Mesh& mesh) const;
+};
+
+}  // namespace vl

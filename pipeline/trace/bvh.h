@@ -1,0 +1,69 @@
+// Bounding volume hierarchy over the scene's world-space triangles: binned SAH build
+// (ERRATA eq. 9) into a flat node array; traversal is VL_HOSTDEV over BvhView so the CUDA
+// launchers reuse it.
+#pragma once
+
+#include "core/aabb.h"
+#include "core/ray.h"
+#include "scene/scene.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace vl {
+
+// Every triangle of a Scene in one array, mesh-major, so a global triangle id maps back
+// to (mesh, local triangle) and from there to UVs, normals and material.
+struct SceneTriangles {
+    std::vector<vec3> vertices;         // 3 per triangle, world space
+    std::vector<uint32_t> meshIndex;    // per triangle
+    std::vector<uint32_t> localIndex;   // per triangle: index within its mesh
+};
+
+SceneTriangles gatherTriangles(const Scene& scene);
+
+struct Hit {
+    float t = kInfinity;
+    uint32_t triangle = ~0u;  // global triangle id
+    float b1 = 0.0f;          // barycentrics: point = (1-b1-b2)·v0 + b1·v1 + b2·v2
+    float b2 = 0.0f;
+};
+
+struct BvhNode {
+    Aabb bounds;
+    uint32_t firstOrChild;  // leaf: first index into the triangle order; inner: right child
+    uint32_t count;         // leaf: triangle count (> 0); inner: 0 (left child is this + 1)
+};
+
+// Plain pointers into a built Bvh: what kernels (host or device) traverse.
+struct BvhView {
+    const BvhNode* nodes = nullptr;
+    const vec3* vertices = nullptr;    // reordered, 3 per leaf slot
+    const uint32_t* triangleIds = nullptr;  // leaf slot → global triangle id
+    uint32_t nodeCount = 0;
+};
+
+struct BvhSettings {
+    int bins = 16;
+    int maxLeafSize = 8;
+    float traversalCost = 1.0f;
+    float intersectionCost = 1.0f;
+};
+
+class Bvh {
+public:
+    static Bvh build(const SceneTriangles& triangles, const BvhSettings& settings = {});
+
+    BvhView view() const;
+    size_t memoryBytes() const;
+    const Aabb& bounds() const;
+
+    std::vector<BvhNode> nodes;
+    std::vector<vec3> vertices;
+    std::vector<uint32_t> triangleIds;
+};
+
+// Traversal (closest hit, any hit) is inline VL_HOSTDEV in trace/bvh_traverse.h, so CUDA
+// compiles it without relocatable device code.
+
+}  // namespace vl

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages voxlight builds with, when any is missing.
+set -euo pipefail
+packages=(build-essential cmake ninja-build
+  libopenvdb-dev libnanovdb-dev libboost-iostreams-dev libopenimageio-dev libtinygltf-dev
+  libglm-dev libtbb-dev catch2 libcli11-dev
+  python3-openvdb libbenchmark-dev libembree-dev)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "installing: ${missing[*]}" >&2
+  sudo_cmd=""
+  [ "$(id -u)" -eq 0 ] || sudo_cmd="sudo"
+  $sudo_cmd apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi

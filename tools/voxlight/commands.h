@@ -1,0 +1,20 @@
+// Each subcommand lives in its own file and registers itself with the app here.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+
+namespace vl::cli {
+
+void addVoxelizeCommand(CLI::App& app);
+void addInspectCommand(CLI::App& app);
+void addReferenceCommand(CLI::App& app);
+void addLightCommand(CLI::App& app);
+void addBakeCommand(CLI::App& app);
+void addBenchCommand(CLI::App& app);
+
+// The project's default scene (scenes/cornell_box.gltf in the source tree).
+std::string defaultScenePath();
+
+}  // namespace vl::cli
