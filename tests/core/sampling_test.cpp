@@ -18,7 +18,7 @@ TEST_CASE("PCG32 is reproducible per item and differs between items", "[core]") 
     REQUIRE_FALSE(allSame);
 }
 
-TEST_CASE("next1D stays in [0, 1) with mean 1/2", "[core]") {
+TEST_CASE("next1D stays in the unit interval with mean one half", "[core]") {
     Pcg32 rng(1, 2);
     double sum = 0.0;
     constexpr int n = 200000;
@@ -32,7 +32,7 @@ TEST_CASE("next1D stays in [0, 1) with mean 1/2", "[core]") {
     REQUIRE(std::abs(sum / n - 0.5) < 5.0 / std::sqrt(12.0 * n));
 }
 
-TEST_CASE("Tent filter of ERRATA eq. 11 maps to [-1, 1) with a triangular density", "[core]") {
+TEST_CASE("Tent filter of ERRATA eq. 11 maps to the interval -1 to 1 with a triangular density", "[core]") {
     REQUIRE(sampleTent(0.0f) == Approx(-1.0f));
     REQUIRE(sampleTent(0.5f) == Approx(0.0f));
     REQUIRE(sampleTent(0.125f) == Approx(-0.5f));  // CDF of the tent at -0.5 is 1/8
