@@ -3,7 +3,7 @@
 set -euo pipefail
 packages=(build-essential cmake ninja-build
   libopenvdb-dev libnanovdb-dev libboost-iostreams-dev libopenimageio-dev libtinygltf-dev
-  libglm-dev libtbb-dev catch2 libcli11-dev
+  libglm-dev libtbb-dev catch2 libcli11-dev nlohmann-json3-dev
   python3-openvdb libbenchmark-dev libembree-dev)
 missing=()
 for p in "${packages[@]}"; do
