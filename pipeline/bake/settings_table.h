@@ -1,0 +1,52 @@
+// Named settings, shared by command-line flags and job files so each setting is declared
+// once: its name, its help text with the default, and how a string value is parsed and
+// checked into the settings struct. A bad value is a SettingsError naming the setting.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace vl {
+
+template <typename Settings>
+struct SettingSpec {
+    std::string name;  // flag is --name, job-file key is name
+    std::string help;  // ends with the default, e.g. "(default 128)"
+    std::function<void(Settings&, const std::string&)> apply;
+};
+
+template <typename Settings>
+using SettingsTable = std::vector<SettingSpec<Settings>>;
+
+// Parse helpers: each names the setting in its error and checks the value's range.
+int parseIntSetting(const std::string& name, const std::string& value, long long lo, long long hi);
+double parseRealSetting(const std::string& name, const std::string& value, double lo, double hi);
+bool parseBoolSetting(const std::string& name, const std::string& value);
+// One of `choices`; returns its index.
+int parseChoiceSetting(const std::string& name, const std::string& value, const std::vector<std::string>& choices);
+
+template <typename Settings>
+void applySetting(const SettingsTable<Settings>& table, Settings& settings, const std::string& name,
+                  const std::string& value);
+
+}  // namespace vl
+
+#include "core/error.h"
+
+namespace vl {
+
+template <typename Settings>
+void applySetting(const SettingsTable<Settings>& table, Settings& settings, const std::string& name,
+                  const std::string& value) {
+    for (const auto& spec : table)
+        if (spec.name == name) {
+            spec.apply(settings, value);
+            return;
+        }
+    std::string known;
+    for (const auto& spec : table) known += (known.empty() ? "" : ", ") + spec.name;
+    throw SettingsError("unknown setting '" + name + "' (known: " + known + ")");
+}
+
+}  // namespace vl
