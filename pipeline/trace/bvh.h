@@ -43,6 +43,10 @@ struct BvhView {
     uint32_t nodeCount = 0;
 };
 
+// The deepest tree Bvh::build makes (it falls back to object-median splits to stay within
+// it), so traversal can use a fixed stack. [added by bvh]
+constexpr int kBvhMaxDepth = 60;
+
 struct BvhSettings {
     int bins = 16;
     int maxLeafSize = 8;

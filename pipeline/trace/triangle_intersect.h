@@ -1,0 +1,106 @@
+// Watertight ray–triangle intersection (Woop, Benthin, Wald 2013, "Watertight Ray/Triangle
+// Intersection", JCGT 2(1)); ERRATA eq. 12–13 asks for watertightness, not Möller–Trumbore's
+// epsilon. The vertices are translated to the ray origin and sheared so the ray becomes
+// +z through (0,0); the 2D edge functions are then exact in sign (double fallback when a
+// float product rounds to 0), so a ray through a shared edge never slips between the two
+// triangles. An edge function exactly 0 is broken by a consistent tie rule (the sign a
+// tiny fixed perturbation of the ray would give), so a ray through a shared edge or vertex
+// of a closed mesh hits exactly one triangle, whichever side faces it.
+#pragma once
+
+#include "core/math.h"
+#include "core/ray.h"
+
+namespace vl {
+
+// Per-ray data for the watertight test: computed once per ray, reused for every triangle.
+struct WatertightRay {
+    vec3 origin;
+    int kx, ky, kz;  // axis permutation: kz is the dominant direction axis
+    float sx, sy, sz;  // shear taking the direction to (0, 0, 1)
+};
+
+VL_HOSTDEV inline WatertightRay makeWatertightRay(const vec3& origin, const vec3& direction) {
+    WatertightRay r;
+    r.origin = origin;
+    const vec3 a = glm::abs(direction);
+    r.kz = a.x >= a.y ? (a.x >= a.z ? 0 : 2) : (a.y >= a.z ? 1 : 2);
+    r.kx = r.kz == 2 ? 0 : r.kz + 1;
+    r.ky = r.kx == 2 ? 0 : r.kx + 1;
+    // Swapping kx and ky for a negative dominant component keeps the winding, so the sign
+    // of the edge functions means the same thing for every ray.
+    if (direction[r.kz] < 0.0f) {
+        const int tmp = r.kx;
+        r.kx = r.ky;
+        r.ky = tmp;
+    }
+    r.sx = direction[r.kx] / direction[r.kz];
+    r.sy = direction[r.ky] / direction[r.kz];
+    r.sz = 1.0f / direction[r.kz];
+    return r;
+}
+
+// The sign the edge function from a to b (sheared 2D coordinates) takes at the ray when
+// the ray is nudged by (−ε, ε²): decides rays exactly on an edge. The opposite edge (b to
+// a) of the neighbouring triangle gets the opposite sign, so exactly one of them owns it.
+VL_HOSTDEV inline bool edgeTieIsPositive(float ax, float ay, float bx, float by) {
+    const float dy = by - ay;
+    return dy > 0.0f || (dy == 0.0f && bx - ax > 0.0f);
+}
+
+struct TriangleHit {
+    float t;
+    float b1, b2;  // point = (1-b1-b2)·v0 + b1·v1 + b2·v2
+};
+
+// Hit iff t ∈ (tMin, tMax). Both faces are hit; a degenerate triangle is never hit.
+VL_HOSTDEV inline bool intersectTriangle(const WatertightRay& ray, const vec3& v0, const vec3& v1,
+                                         const vec3& v2, float tMin, float tMax, TriangleHit& hit) {
+    const vec3 a = v0 - ray.origin;
+    const vec3 b = v1 - ray.origin;
+    const vec3 c = v2 - ray.origin;
+    const float ax = a[ray.kx] - ray.sx * a[ray.kz];
+    const float ay = a[ray.ky] - ray.sy * a[ray.kz];
+    const float bx = b[ray.kx] - ray.sx * b[ray.kz];
+    const float by = b[ray.ky] - ray.sy * b[ray.kz];
+    const float cx = c[ray.kx] - ray.sx * c[ray.kz];
+    const float cy = c[ray.ky] - ray.sy * c[ray.kz];
+
+    // u weights v0 (edge v2→v1), v weights v1 (edge v0→v2), w weights v2 (edge v1→v0).
+    float u = cx * by - cy * bx;
+    float v = ax * cy - ay * cx;
+    float w = bx * ay - by * ax;
+    // float×float is exact in double, so an edge that rounds to 0 gets its exact sign. Each
+    // edge's value depends only on that edge's two vertices, so the neighbouring triangle
+    // computes exactly the negated value for the shared edge: no gap, no double count.
+    if (u == 0.0f) u = static_cast<float>(static_cast<double>(cx) * by - static_cast<double>(cy) * bx);
+    if (v == 0.0f) v = static_cast<float>(static_cast<double>(ax) * cy - static_cast<double>(ay) * cx);
+    if (w == 0.0f) w = static_cast<float>(static_cast<double>(bx) * ay - static_cast<double>(by) * ax);
+    const bool uPos = u != 0.0f ? u > 0.0f : edgeTieIsPositive(cx, cy, bx, by);
+    const bool vPos = v != 0.0f ? v > 0.0f : edgeTieIsPositive(ax, ay, cx, cy);
+    const bool wPos = w != 0.0f ? w > 0.0f : edgeTieIsPositive(bx, by, ax, ay);
+    if (uPos != vPos || vPos != wPos) return false;
+
+    const float det = u + v + w;
+    if (det == 0.0f) return false;
+    const float az = ray.sz * a[ray.kz];
+    const float bz = ray.sz * b[ray.kz];
+    const float cz = ray.sz * c[ray.kz];
+    const float invDet = 1.0f / det;
+    const float t = (u * az + v * bz + w * cz) * invDet;
+    // Written so a NaN t is rejected.
+    if (!(t > tMin && t < tMax)) return false;
+    hit.t = t;
+    hit.b1 = v * invDet;
+    hit.b2 = w * invDet;
+    return true;
+}
+
+// Convenience for one-off tests; traversal builds the WatertightRay once per ray instead.
+VL_HOSTDEV inline bool intersectTriangle(const Ray& ray, const vec3& v0, const vec3& v1, const vec3& v2,
+                                         TriangleHit& hit) {
+    return intersectTriangle(makeWatertightRay(ray.origin, ray.direction), v0, v1, v2, ray.tMin, ray.tMax,
+                             hit);
+}
+
+}  // namespace vl
