@@ -1,0 +1,454 @@
+#include "voxel/vdb_file.h"
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "voxel/vdb_detail.h"
+
+#include <openvdb/openvdb.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <set>
+#include <sstream>
+#include <tuple>
+#include <type_traits>
+
+namespace vl {
+
+namespace vdb_detail {
+
+namespace {
+
+void initializeOpenVdb() {
+    // Registers the grid types; idempotent and thread-safe in OpenVDB ≥ 8.
+    openvdb::initialize();
+}
+
+void requireReadableFile(const std::string& path) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const auto status = fs::status(path, ec);
+    if (ec || !fs::exists(status)) throw InputError(path + ": no such file");
+    if (!fs::is_regular_file(status)) throw InputError(path + ": not a regular file");
+}
+
+std::string gridNamesOf(openvdb::io::File& file) {
+    std::string names;
+    for (auto it = file.beginName(); it != file.endName(); ++it) {
+        if (!names.empty()) names += ", ";
+        names += "'" + *it + "'";
+    }
+    return names.empty() ? std::string("none") : names;
+}
+
+// OpenVDB reports a non-VDB file as an IoError, a truncated one as anything from IoError to
+// std::bad_alloc (a garbage length); all of them mean the same to a user.
+template <typename F>
+auto guardedRead(const std::string& path, F&& read) {
+    try {
+        return read();
+    } catch (const Error&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw InputError(path + ": not a readable OpenVDB file (" + e.what() + ")");
+    }
+}
+
+}  // namespace
+
+LoadedFile readAllGrids(const std::string& path) {
+    initializeOpenVdb();
+    requireReadableFile(path);
+    return guardedRead(path, [&] {
+        openvdb::io::File file(path);
+        file.open(/*delayLoad=*/false);
+        LoadedFile loaded;
+        loaded.grids = file.getGrids();
+        loaded.metadata = file.getMetadata();
+        if (!loaded.metadata) loaded.metadata = std::make_shared<openvdb::MetaMap>();
+        if (!loaded.grids) loaded.grids = std::make_shared<openvdb::GridPtrVec>();
+        file.close();
+        return loaded;
+    });
+}
+
+openvdb::GridBase::Ptr readGrid(const std::string& path, const std::string& gridName) {
+    initializeOpenVdb();
+    requireReadableFile(path);
+    return guardedRead(path, [&] {
+        openvdb::io::File file(path);
+        file.open(/*delayLoad=*/false);
+        if (!file.hasGrid(gridName))
+            throw InputError(path + ": no grid named '" + gridName + "' (the file has " + gridNamesOf(file) + ")");
+        openvdb::GridBase::Ptr grid = file.readGrid(gridName);
+        file.close();
+        return grid;
+    });
+}
+
+}  // namespace vdb_detail
+
+namespace {
+
+using openvdb::Coord;
+
+const char* const kMetaVoxelSize = "voxel_size";
+const char* const kMetaSettings = "settings";
+const char* const kMetaSourceScene = "source_scene";
+const char* const kMetaVersion = "voxlight_version";
+
+bool lexLess(const ivec3& a, const ivec3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); }
+
+std::string coordText(const ivec3& c) {
+    return "(" + std::to_string(c.x) + ", " + std::to_string(c.y) + ", " + std::to_string(c.z) + ")";
+}
+
+Coord toCoord(const ivec3& c) { return Coord(c.x, c.y, c.z); }
+openvdb::Vec3f toVdb(const vec3& v) { return openvdb::Vec3f(v.x, v.y, v.z); }
+vec3 fromVdb(const openvdb::Vec3f& v) { return vec3(v.x(), v.y(), v.z()); }
+
+// ---- writing --------------------------------------------------------------------------
+
+void requireFinite(float value, const std::string& gridName, const ivec3& coord) {
+    if (!std::isfinite(value))
+        throw Error("writeVoxelFile: non-finite value in grid '" + gridName + "' at voxel " + coordText(coord));
+}
+
+void requireFinite(const vec3& value, const std::string& gridName, const ivec3& coord) {
+    for (int c = 0; c < 3; ++c) requireFinite(value[c], gridName, coord);
+}
+
+template <typename GridT>
+typename GridT::Ptr newGrid(const std::string& name, const openvdb::math::Transform::Ptr& transform) {
+    auto grid = GridT::create();
+    grid->setName(name);
+    grid->setTransform(transform);
+    grid->setCreator(std::string("voxlight ") + VOXLIGHT_VERSION);
+    return grid;
+}
+
+// A grid active exactly at `coords`, valueAt(i) being the value of coords[i].
+template <typename GridT, typename ValueAt>
+typename GridT::Ptr channelGrid(const std::string& name, const openvdb::math::Transform::Ptr& transform,
+                                const std::vector<ivec3>& coords, ValueAt valueAt) {
+    auto grid = newGrid<GridT>(name, transform);
+    auto accessor = grid->getAccessor();
+    for (size_t i = 0; i < coords.size(); ++i) accessor.setValueOn(toCoord(coords[i]), valueAt(i));
+    return grid;
+}
+
+void requireChannelSize(size_t actual, size_t expected, const char* name, bool optional) {
+    if (actual == expected || (optional && actual == 0)) return;
+    throw Error(std::string("writeVoxelFile: channel '") + name + "' has " + std::to_string(actual) +
+                " values for " + std::to_string(expected) + " voxels");
+}
+
+void validateScene(const VoxelScene& voxels) {
+    if (!(voxels.voxelSize > 0.0) || !std::isfinite(voxels.voxelSize))
+        throw Error("writeVoxelFile: voxel size must be positive and finite, got " + std::to_string(voxels.voxelSize));
+    const size_t n = voxels.size();
+    requireChannelSize(voxels.albedo.size(), n, grid_names::albedo, false);
+    requireChannelSize(voxels.normal.size(), n, grid_names::normal, false);
+    requireChannelSize(voxels.axisWeights.size(), n, "axisWeights", false);
+    requireChannelSize(voxels.opacity.size(), n, grid_names::opacity, false);
+    requireChannelSize(voxels.solid.size(), n, grid_names::solid, false);
+    requireChannelSize(voxels.emission.size(), n, grid_names::emission, true);
+    requireChannelSize(voxels.radiance.size(), n, grid_names::radiance, true);
+    requireChannelSize(voxels.occlusion.size(), n, grid_names::occlusion, true);
+    for (size_t i = 1; i < n; ++i)
+        if (!lexLess(voxels.coords[i - 1], voxels.coords[i]))
+            throw Error("writeVoxelFile: voxel coords are not sorted and unique at index " + std::to_string(i) + " " +
+                        coordText(voxels.coords[i]));
+    for (size_t i = 0; i < n; ++i) {
+        const ivec3& c = voxels.coords[i];
+        requireFinite(voxels.albedo[i], grid_names::albedo, c);
+        requireFinite(voxels.normal[i], grid_names::normal, c);
+        requireFinite(voxels.opacity[i], grid_names::opacity, c);
+        for (float w : voxels.axisWeights[i]) requireFinite(w, "axis_weights", c);
+        if (!voxels.emission.empty()) requireFinite(voxels.emission[i], grid_names::emission, c);
+        if (!voxels.radiance.empty()) requireFinite(voxels.radiance[i], grid_names::radiance, c);
+        if (!voxels.occlusion.empty()) requireFinite(voxels.occlusion[i], grid_names::occlusion, c);
+    }
+}
+
+void validateExtra(const ExtraGrid& grid, std::set<std::string>& names) {
+    if (grid.name.empty()) throw Error("writeVoxelFile: an extra grid has no name");
+    if (!names.insert(grid.name).second)
+        throw Error("writeVoxelFile: grid name '" + grid.name + "' is used twice");
+    if (!(grid.voxelSize > 0.0) || !std::isfinite(grid.voxelSize))
+        throw Error("writeVoxelFile: grid '" + grid.name + "' needs a positive finite voxel size");
+    if (!grid.scalars.empty() && !grid.vectors.empty())
+        throw Error("writeVoxelFile: grid '" + grid.name + "' has both scalar and vector values");
+    const size_t values = grid.isVector() ? grid.vectors.size() : grid.scalars.size();
+    if (values != grid.coords.size())
+        throw Error("writeVoxelFile: grid '" + grid.name + "' has " + std::to_string(values) + " values for " +
+                    std::to_string(grid.coords.size()) + " voxels");
+    for (size_t i = 0; i < grid.coords.size(); ++i) {
+        if (grid.isVector()) requireFinite(grid.vectors[i], grid.name, grid.coords[i]);
+        else requireFinite(grid.scalars[i], grid.name, grid.coords[i]);
+    }
+}
+
+// ---- reading --------------------------------------------------------------------------
+
+// Calls f(coord) for every active voxel, expanding active tiles (which foreign writers or a
+// pruned tree may hold).
+template <typename GridT, typename F>
+void forEachActiveVoxel(const GridT& grid, F&& f) {
+    for (auto it = grid.cbeginValueOn(); it; ++it) {
+        if (it.isVoxelValue()) {
+            f(it.getCoord(), *it);
+        } else {
+            openvdb::CoordBBox box;
+            it.getBoundingBox(box);
+            for (auto c = box.begin(); c; ++c) f(*c, *it);
+        }
+    }
+}
+
+template <typename GridT>
+std::vector<ivec3> sortedActiveCoords(const GridT& grid, const std::string& path) {
+    constexpr openvdb::Index64 kMaxVoxels = openvdb::Index64(1) << 31;
+    if (grid.activeVoxelCount() > kMaxVoxels)
+        throw InputError(path + ": grid '" + grid.getName() + "' has " + std::to_string(grid.activeVoxelCount()) +
+                         " active voxels, more than voxlight handles");
+    std::vector<ivec3> coords;
+    coords.reserve(grid.activeVoxelCount());
+    forEachActiveVoxel(grid, [&](const Coord& c, const auto&) { coords.emplace_back(c.x(), c.y(), c.z()); });
+    std::sort(coords.begin(), coords.end(), lexLess);
+    return coords;
+}
+
+class GridSet {
+public:
+    GridSet(std::string path, vdb_detail::LoadedFile loaded) : path_(std::move(path)), loaded_(std::move(loaded)) {
+        for (const auto& grid : *loaded_.grids)
+            if (grid) byName_.emplace(grid->getName(), grid);
+    }
+
+    template <typename GridT>
+    typename GridT::ConstPtr get(const char* name, bool required, const char* expectedType) const {
+        auto it = byName_.find(name);
+        if (it == byName_.end()) {
+            if (required) throw InputError(path_ + ": required grid '" + name + "' is missing");
+            return nullptr;
+        }
+        auto typed = openvdb::gridConstPtrCast<GridT>(it->second);
+        if (!typed)
+            throw InputError(path_ + ": grid '" + name + "' has value type " + it->second->valueType() + ", expected " +
+                             expectedType);
+        return typed;
+    }
+
+    const openvdb::MetaMap& metadata() const { return *loaded_.metadata; }
+
+private:
+    std::string path_;
+    vdb_detail::LoadedFile loaded_;
+    std::map<std::string, openvdb::GridBase::ConstPtr> byName_;
+};
+
+// voxlight grids use a pure scale by h, centred on the origin (voxel_scene.h's convention).
+double requireVoxlightTransform(const openvdb::GridBase& grid, const std::string& path) {
+    const auto& transform = grid.constTransform();
+    const openvdb::Vec3d size = transform.voxelSize();
+    const openvdb::Vec3d origin = transform.indexToWorld(openvdb::Vec3d(0.0));
+    if (!transform.isLinear() || !transform.hasUniformScale() || !(size[0] > 0.0) || origin != openvdb::Vec3d(0.0))
+        throw InputError(path + ": grid '" + grid.getName() +
+                         "' does not have a uniform, origin-centred linear transform (voxlight's convention)");
+    return size[0];
+}
+
+std::string stringMeta(const openvdb::MetaMap& meta, const char* key) {
+    auto value = meta.getMetadata<openvdb::StringMetadata>(key);
+    return value ? value->value() : std::string();
+}
+
+}  // namespace
+
+void writeVoxelFile(const VoxelScene& voxels, const std::string& path, const std::vector<ExtraGrid>& extra) {
+    vdb_detail::initializeOpenVdb();
+    validateScene(voxels);
+    std::set<std::string> names = {grid_names::albedo,    grid_names::normal, grid_names::emission,
+                                   grid_names::opacity,   grid_names::occlusion, grid_names::solid,
+                                   grid_names::radiance,  grid_names::axisWeightsPos, grid_names::axisWeightsNeg};
+    for (const ExtraGrid& grid : extra) validateExtra(grid, names);
+
+    const auto transform = openvdb::math::Transform::createLinearTransform(voxels.voxelSize);
+    const auto& coords = voxels.coords;
+    openvdb::GridPtrVec grids;
+
+    grids.push_back(channelGrid<openvdb::Vec3SGrid>(grid_names::albedo, transform, coords,
+                                                    [&](size_t i) { return toVdb(voxels.albedo[i]); }));
+    auto normal = channelGrid<openvdb::Vec3SGrid>(grid_names::normal, transform, coords,
+                                                  [&](size_t i) { return toVdb(voxels.normal[i]); });
+    normal->setVectorType(openvdb::VEC_COVARIANT_NORMALIZE);
+    grids.push_back(normal);
+    if (!voxels.emission.empty())
+        grids.push_back(channelGrid<openvdb::Vec3SGrid>(grid_names::emission, transform, coords,
+                                                        [&](size_t i) { return toVdb(voxels.emission[i]); }));
+    auto opacity = channelGrid<openvdb::FloatGrid>(grid_names::opacity, transform, coords,
+                                                   [&](size_t i) { return voxels.opacity[i]; });
+    opacity->setGridClass(openvdb::GRID_FOG_VOLUME);
+    grids.push_back(opacity);
+    if (!voxels.occlusion.empty())
+        grids.push_back(channelGrid<openvdb::FloatGrid>(grid_names::occlusion, transform, coords,
+                                                        [&](size_t i) { return voxels.occlusion[i]; }));
+    {
+        auto solid = newGrid<openvdb::BoolGrid>(grid_names::solid, transform);
+        auto accessor = solid->getAccessor();
+        for (size_t i = 0; i < coords.size(); ++i)
+            if (voxels.solid[i]) accessor.setValueOn(toCoord(coords[i]), true);
+        grids.push_back(solid);
+    }
+    if (!voxels.radiance.empty())
+        grids.push_back(channelGrid<openvdb::Vec3SGrid>(grid_names::radiance, transform, coords,
+                                                        [&](size_t i) { return toVdb(voxels.radiance[i]); }));
+    grids.push_back(channelGrid<openvdb::Vec3SGrid>(grid_names::axisWeightsPos, transform, coords, [&](size_t i) {
+        const AxisWeights& w = voxels.axisWeights[i];
+        return openvdb::Vec3f(w[0], w[2], w[4]);
+    }));
+    grids.push_back(channelGrid<openvdb::Vec3SGrid>(grid_names::axisWeightsNeg, transform, coords, [&](size_t i) {
+        const AxisWeights& w = voxels.axisWeights[i];
+        return openvdb::Vec3f(w[1], w[3], w[5]);
+    }));
+
+    for (const ExtraGrid& e : extra) {
+        const auto extraTransform = openvdb::math::Transform::createLinearTransform(e.voxelSize);
+        if (e.isVector())
+            grids.push_back(channelGrid<openvdb::Vec3SGrid>(e.name, extraTransform, e.coords,
+                                                            [&](size_t i) { return toVdb(e.vectors[i]); }));
+        else
+            grids.push_back(channelGrid<openvdb::FloatGrid>(e.name, extraTransform, e.coords,
+                                                            [&](size_t i) { return e.scalars[i]; }));
+    }
+
+    openvdb::MetaMap meta;
+    meta.insertMeta(kMetaVoxelSize, openvdb::DoubleMetadata(voxels.voxelSize));
+    meta.insertMeta(kMetaSettings, openvdb::StringMetadata(voxels.settings));
+    meta.insertMeta(kMetaSourceScene, openvdb::StringMetadata(voxels.sourceScene));
+    meta.insertMeta(kMetaVersion, openvdb::StringMetadata(VOXLIGHT_VERSION));
+
+    writeAtomically(path, [&](const std::string& tempPath) {
+        try {
+            openvdb::io::File file(tempPath);
+            file.write(grids, meta);
+            file.close();
+        } catch (const openvdb::Exception& e) {
+            throw Error(path + ": cannot write the voxel grids (" + e.what() + ")");
+        }
+    });
+}
+
+VoxelScene readVoxelFile(const std::string& path) {
+    const GridSet set(path, vdb_detail::readAllGrids(path));
+    using openvdb::BoolGrid;
+    using openvdb::FloatGrid;
+    using openvdb::Vec3SGrid;
+    const auto albedo = set.get<Vec3SGrid>(grid_names::albedo, true, "vec3s");
+    const auto normal = set.get<Vec3SGrid>(grid_names::normal, true, "vec3s");
+    const auto emission = set.get<Vec3SGrid>(grid_names::emission, false, "vec3s");
+    const auto opacity = set.get<FloatGrid>(grid_names::opacity, true, "float");
+    const auto occlusion = set.get<FloatGrid>(grid_names::occlusion, false, "float");
+    const auto solid = set.get<BoolGrid>(grid_names::solid, true, "bool");
+    const auto radiance = set.get<Vec3SGrid>(grid_names::radiance, false, "vec3s");
+    const auto axisPos = set.get<Vec3SGrid>(grid_names::axisWeightsPos, true, "vec3s");
+    const auto axisNeg = set.get<Vec3SGrid>(grid_names::axisWeightsNeg, true, "vec3s");
+
+    VoxelScene voxels;
+    voxels.voxelSize = requireVoxlightTransform(*opacity, path);
+    const std::vector<const openvdb::GridBase*> all = {albedo.get(),   normal.get(),    emission.get(),
+                                                       opacity.get(),  occlusion.get(), solid.get(),
+                                                       radiance.get(), axisPos.get(),   axisNeg.get()};
+    for (const openvdb::GridBase* grid : all)
+        if (grid && requireVoxlightTransform(*grid, path) != voxels.voxelSize)
+            throw InputError(path + ": grid '" + grid->getName() + "' has voxel size " +
+                             std::to_string(grid->constTransform().voxelSize()[0]) + ", grid 'opacity' has " +
+                             std::to_string(voxels.voxelSize));
+    if (auto size = set.metadata().getMetadata<openvdb::DoubleMetadata>(kMetaVoxelSize);
+        size && size->value() != voxels.voxelSize)
+        throw InputError(path + ": file metadata voxel_size " + std::to_string(size->value()) +
+                         " disagrees with the grids' transform (" + std::to_string(voxels.voxelSize) + ")");
+    voxels.settings = stringMeta(set.metadata(), kMetaSettings);
+    voxels.sourceScene = stringMeta(set.metadata(), kMetaSourceScene);
+
+    voxels.coords = sortedActiveCoords(*opacity, path);
+    const size_t n = voxels.coords.size();
+
+    // Same active voxel count and every opacity voxel active ⇒ the same active set.
+    auto requireSameTopology = [&](const auto& grid) {
+        if (grid->activeVoxelCount() != n)
+            throw InputError(path + ": grid '" + grid->getName() + "' has " +
+                             std::to_string(grid->activeVoxelCount()) + " active voxels, grid 'opacity' has " +
+                             std::to_string(n));
+    };
+    auto readChannel = [&](const auto& grid, auto& out, auto convert) {
+        if (!grid) return;
+        requireSameTopology(grid);
+        out.resize(n);
+        auto accessor = grid->getConstAccessor();
+        for (size_t i = 0; i < n; ++i) {
+            typename std::decay_t<decltype(*grid)>::ValueType value;
+            if (!accessor.probeValue(toCoord(voxels.coords[i]), value))
+                throw InputError(path + ": grid '" + grid->getName() + "' has no active voxel at " +
+                                 coordText(voxels.coords[i]) + ", where grid 'opacity' has one");
+            out[i] = convert(value);
+        }
+    };
+    const auto asVec3 = [](const openvdb::Vec3f& v) { return fromVdb(v); };
+    const auto asFloat = [](float v) { return v; };
+    readChannel(albedo, voxels.albedo, asVec3);
+    readChannel(normal, voxels.normal, asVec3);
+    readChannel(emission, voxels.emission, asVec3);
+    readChannel(opacity, voxels.opacity, asFloat);
+    readChannel(occlusion, voxels.occlusion, asFloat);
+    readChannel(radiance, voxels.radiance, asVec3);
+    std::vector<vec3> pos, neg;
+    readChannel(axisPos, pos, asVec3);
+    readChannel(axisNeg, neg, asVec3);
+    voxels.axisWeights.resize(n);
+    for (size_t i = 0; i < n; ++i)
+        voxels.axisWeights[i] = {pos[i].x, neg[i].x, pos[i].y, neg[i].y, pos[i].z, neg[i].z};
+
+    voxels.solid.assign(n, 0);
+    auto solidAccessor = solid->getConstAccessor();
+    openvdb::Index64 solidFound = 0;
+    for (size_t i = 0; i < n; ++i) {
+        bool value = false;
+        if (solidAccessor.probeValue(toCoord(voxels.coords[i]), value)) {
+            ++solidFound;
+            voxels.solid[i] = value ? 1 : 0;
+        }
+    }
+    if (solidFound != solid->activeVoxelCount())
+        throw InputError(path + ": grid 'solid' has " + std::to_string(solid->activeVoxelCount() - solidFound) +
+                         " active voxels outside grid 'opacity'");
+    return voxels;
+}
+
+ExtraGrid readExtraGrid(const std::string& path, const std::string& gridName) {
+    const openvdb::GridBase::Ptr base = vdb_detail::readGrid(path, gridName);
+    ExtraGrid out;
+    out.name = gridName;
+    out.voxelSize = requireVoxlightTransform(*base, path);
+    if (auto scalar = openvdb::gridConstPtrCast<openvdb::FloatGrid>(base)) {
+        out.coords = sortedActiveCoords(*scalar, path);
+        out.scalars.resize(out.coords.size());
+        auto accessor = scalar->getConstAccessor();
+        for (size_t i = 0; i < out.coords.size(); ++i) out.scalars[i] = accessor.getValue(toCoord(out.coords[i]));
+    } else if (auto vector = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(base)) {
+        out.coords = sortedActiveCoords(*vector, path);
+        out.vectors.resize(out.coords.size());
+        auto accessor = vector->getConstAccessor();
+        for (size_t i = 0; i < out.coords.size(); ++i)
+            out.vectors[i] = fromVdb(accessor.getValue(toCoord(out.coords[i])));
+    } else {
+        throw InputError(path + ": grid '" + gridName + "' has value type " + base->valueType() +
+                         ", expected float or vec3s");
+    }
+    return out;
+}
+
+}  // namespace vl
