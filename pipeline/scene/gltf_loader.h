@@ -1,5 +1,14 @@
 // glTF 2.0 (.gltf, .glb) → Scene. Throws InputError naming the file and the element
 // (mesh / primitive / accessor / image) for input it cannot represent faithfully.
+//
+// What it reads: the default scene (or scene 0; the parentless nodes when the file has no
+// scenes) with its node hierarchy (TRS or matrix); triangles, strips and fans, indexed or not,
+// sparse and normalized accessors; POSITION, NORMAL (area-weighted when absent), TEXCOORD_0/1,
+// COLOR_0; materials with KHR_materials_emissive_strength, _transmission, _ior and
+// KHR_texture_transform; base colour and emissive textures decoded to linear RGBA;
+// KHR_lights_punctual; perspective cameras. Units as scene.h states.
+// Warnings (points/lines skipped, missing images, out-of-spec factors, degenerate triangles
+// dropped) go to stderr and Scene::warnings; under `strict` the first one throws.
 #pragma once
 
 #include "core/diagnostics.h"
@@ -10,9 +19,13 @@
 namespace vl {
 
 struct LoadOptions {
-    bool strict = false;  // every warning becomes an error
+    bool strict = false;        // every warning becomes an error
+    bool echoWarnings = true;   // print warnings to stderr as they are raised
 };
 
 Scene loadGltf(const std::string& path, const LoadOptions& options = {});
+
+// The extensions loadGltf understands; a file that requires any other is refused.
+const std::vector<std::string>& supportedGltfExtensions();
 
 }  // namespace vl
