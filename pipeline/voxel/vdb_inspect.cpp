@@ -57,7 +57,9 @@ bool finite(const ValueT& value) {
 
 int binOf(double v, double lo, double hi, int bins) {
     if (!(hi > lo)) return 0;
-    const int b = static_cast<int>(std::floor((v - lo) / (hi - lo) * bins));
+    // Multiply before dividing so that a value on a bin edge (often a round number) lands
+    // exactly on it rather than a rounding error below.
+    const int b = static_cast<int>(std::floor((v - lo) * bins / (hi - lo)));
     return std::clamp(b, 0, bins - 1);
 }
 
