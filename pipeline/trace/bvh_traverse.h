@@ -14,42 +14,44 @@
 
 namespace vl {
 
-// Per-ray data for the slab test. A zero direction component would give 1/±0 = ±inf and,
-// for an origin exactly on a slab plane, 0·inf = NaN; the largest finite float instead keeps
-// every product a number (0 on the plane, ±huge or ±inf off it) with the same ordering.
+// Per-ray data for the slab test. A zero (or denormal) direction component gives an
+// infinite inverse, and for an origin exactly on a slab plane (bound − origin)·inf = 0·inf
+// = NaN; `parallelToAxis` says the ray has such a component, so only those rays pay for
+// the NaN handling in intersectBox.
 struct RayBoxData {
     vec3 origin;
     vec3 invDirection;
+    bool parallelToAxis;
 };
 
-VL_HOSTDEV inline float safeInverse(float d) {
-    const float inv = 1.0f / d;
-    return isFinite(inv) ? inv : (inv > 0.0f ? kInfinity : -kInfinity);
-}
-
 VL_HOSTDEV inline RayBoxData makeRayBoxData(const Ray& ray) {
-    return {ray.origin, vec3(safeInverse(ray.direction.x), safeInverse(ray.direction.y), safeInverse(ray.direction.z))};
+    const vec3 inv(1.0f / ray.direction.x, 1.0f / ray.direction.y, 1.0f / ray.direction.z);
+    return {ray.origin, inv, !isFinite(inv)};
 }
 
 // Slab test (Williams et al. 2005) with Ize's conservative rounding ("Robust BVH Ray
 // Traversal", JCGT 2013): the far distance is scaled by 1 + 2γ₃ so rounding in
-// (bound − origin)·invDirection never culls a box the ray touches. Returns the entry
-// distance in tNear.
+// (bound − origin)·invDirection never culls a box the ray touches. With ParallelToAxis, a
+// NaN slab distance (origin on a plane of a slab the ray runs parallel to) means the ray
+// lies in that plane, which the slab does not restrict: a ray along the face of a box
+// still enters it (Ize's 0·inf case). Returns the entry distance in tNear.
+template <bool ParallelToAxis>
 VL_HOSTDEV inline bool intersectBox(const Aabb& box, const RayBoxData& ray, float tMin, float tMax, float& tNear) {
     constexpr float kFarScale = 1.0f + 2.0f * (3.0f * 0x1p-24f) / (1.0f - 3.0f * 0x1p-24f);
-    float t0x = (box.lower.x - ray.origin.x) * ray.invDirection.x;
-    float t1x = (box.upper.x - ray.origin.x) * ray.invDirection.x;
-    float t0y = (box.lower.y - ray.origin.y) * ray.invDirection.y;
-    float t1y = (box.upper.y - ray.origin.y) * ray.invDirection.y;
-    float t0z = (box.lower.z - ray.origin.z) * ray.invDirection.z;
-    float t1z = (box.upper.z - ray.origin.z) * ray.invDirection.z;
-    const float nearX = glm::min(t0x, t1x), farX = glm::max(t0x, t1x);
-    const float nearY = glm::min(t0y, t1y), farY = glm::max(t0y, t1y);
-    const float nearZ = glm::min(t0z, t1z), farZ = glm::max(t0z, t1z);
-    const float enter = glm::max(glm::max(nearX, nearY), glm::max(nearZ, tMin));
-    const float leave = glm::min(glm::min(farX, farY), glm::min(farZ, tMax)) * kFarScale;
+    float enter = tMin, leave = tMax;
+    for (int axis = 0; axis < 3; ++axis) {
+        const float t0 = (box.lower[axis] - ray.origin[axis]) * ray.invDirection[axis];
+        const float t1 = (box.upper[axis] - ray.origin[axis]) * ray.invDirection[axis];
+        float nearAxis = glm::min(t0, t1), farAxis = glm::max(t0, t1);
+        if (ParallelToAxis && (t0 != t0 || t1 != t1)) {
+            nearAxis = -kInfinity;
+            farAxis = kInfinity;
+        }
+        enter = glm::max(enter, nearAxis);
+        leave = glm::min(leave, farAxis);
+    }
     tNear = enter;
-    return enter <= leave;
+    return enter <= leave * kFarScale;
 }
 
 // Deep enough for any tree Bvh::build makes (it caps the depth at kBvhMaxDepth).
@@ -57,16 +59,14 @@ constexpr int kBvhStackSize = 64;
 
 namespace detail {
 
-template <bool AnyHit>
-VL_HOSTDEV inline bool traverse(const BvhView& bvh, const Ray& ray, Hit& hit) {
-    if (bvh.nodeCount == 0) return false;
-    const RayBoxData boxRay = makeRayBoxData(ray);
+template <bool AnyHit, bool ParallelToAxis>
+VL_HOSTDEV inline bool traverse(const BvhView& bvh, const Ray& ray, const RayBoxData& boxRay, Hit& hit) {
     const WatertightRay triRay = makeWatertightRay(ray.origin, ray.direction);
     float tMax = ray.tMax;
     bool found = false;
 
     float tRoot;
-    if (!intersectBox(bvh.nodes[0].bounds, boxRay, ray.tMin, tMax, tRoot)) return false;
+    if (!intersectBox<ParallelToAxis>(bvh.nodes[0].bounds, boxRay, ray.tMin, tMax, tRoot)) return false;
 
     uint32_t stack[kBvhStackSize];
     float stackNear[kBvhStackSize];
@@ -93,8 +93,8 @@ VL_HOSTDEV inline bool traverse(const BvhView& bvh, const Ray& ray, Hit& hit) {
             const uint32_t left = current + 1;
             const uint32_t right = node.firstOrChild;
             float nearLeft, nearRight;
-            const bool hitLeft = intersectBox(bvh.nodes[left].bounds, boxRay, ray.tMin, tMax, nearLeft);
-            const bool hitRight = intersectBox(bvh.nodes[right].bounds, boxRay, ray.tMin, tMax, nearRight);
+            const bool hitLeft = intersectBox<ParallelToAxis>(bvh.nodes[left].bounds, boxRay, ray.tMin, tMax, nearLeft);
+            const bool hitRight = intersectBox<ParallelToAxis>(bvh.nodes[right].bounds, boxRay, ray.tMin, tMax, nearRight);
             if (hitLeft && hitRight) {
                 const bool leftFirst = nearLeft <= nearRight;
                 stack[top] = leftFirst ? right : left;
@@ -120,6 +120,14 @@ VL_HOSTDEV inline bool traverse(const BvhView& bvh, const Ray& ray, Hit& hit) {
         }
         current = stack[top];
     }
+}
+
+template <bool AnyHit>
+VL_HOSTDEV inline bool traverse(const BvhView& bvh, const Ray& ray, Hit& hit) {
+    if (bvh.nodeCount == 0) return false;
+    const RayBoxData boxRay = makeRayBoxData(ray);
+    return boxRay.parallelToAxis ? traverse<AnyHit, true>(bvh, ray, boxRay, hit)
+                                 : traverse<AnyHit, false>(bvh, ray, boxRay, hit);
 }
 
 }  // namespace detail
