@@ -1,0 +1,225 @@
+#include "trace/trace_scene.h"
+
+#include "core/error.h"
+#include "scene/scene.h"
+#include "trace/bvh.h"
+
+#include <cmath>
+#include <string>
+
+namespace vl {
+namespace {
+
+TraceTextureRef convertTextureRef(const TextureRef& ref, size_t textureCount) {
+    TraceTextureRef out;
+    if (!ref.valid() || static_cast<size_t>(ref.texture) >= textureCount) return out;
+    out.texture = ref.texture;
+    out.texCoord = ref.texCoord == 1 ? 1 : 0;
+    // KHR_texture_transform: uv' = T · R · S · uv with R = [cos sin; −sin cos].
+    const float c = std::cos(ref.transform.rotation), s = std::sin(ref.transform.rotation);
+    const vec2 sc = ref.transform.scale;
+    out.m[0] = c * sc.x;
+    out.m[1] = s * sc.y;
+    out.m[2] = ref.transform.offset.x;
+    out.m[3] = -s * sc.x;
+    out.m[4] = c * sc.y;
+    out.m[5] = ref.transform.offset.y;
+    return out;
+}
+
+TraceMaterial convertMaterial(const Material& m, size_t textureCount) {
+    TraceMaterial out;
+    if (m.transmission > 0.0f) out.kind = MaterialKind::Dielectric;
+    else if (m.metallic >= 1.0f && m.roughness <= 0.0f) out.kind = MaterialKind::Mirror;
+    else out.kind = MaterialKind::Lambert;
+    out.baseColor = glm::clamp(vec3(m.baseColorFactor), vec3(0.0f), vec3(1.0f));
+    out.baseColorTexture = convertTextureRef(m.baseColorTexture, textureCount);
+    out.emission = glm::max(m.emission(), vec3(0.0f));
+    out.emissiveTexture = convertTextureRef(m.emissiveTexture, textureCount);
+    out.ior = m.ior;
+    out.transmission = glm::clamp(m.transmission, 0.0f, 1.0f);
+    out.doubleSided = m.doubleSided ? 1u : 0u;
+    return out;
+}
+
+TraceLight convertLight(const Light& light) {
+    TraceLight out;
+    out.type = light.type == LightType::Point ? TraceLightType::Point
+               : light.type == LightType::Spot ? TraceLightType::Spot
+                                                : TraceLightType::Directional;
+    out.intensity = glm::max(light.radiantIntensity(), vec3(0.0f));
+    out.position = light.position;
+    out.direction = glm::normalize(light.direction);
+    out.range = light.range > 0.0f ? light.range : 0.0f;
+    if (light.type == LightType::Spot) {
+        // glTF KHR_lights_punctual's recommended smooth falloff between the cones.
+        const float cosOuter = std::cos(light.outerConeAngle);
+        const float cosInner = std::cos(light.innerConeAngle);
+        out.spotScale = 1.0f / glm::max(0.001f, cosInner - cosOuter);
+        out.spotOffset = -cosOuter * out.spotScale;
+    }
+    return out;
+}
+
+uint32_t wrapCode(WrapMode mode) {
+    return mode == WrapMode::ClampToEdge ? 1u : mode == WrapMode::MirroredRepeat ? 2u : 0u;
+}
+
+std::string where(const Scene& scene, const Mesh& mesh) {
+    return scene.sourcePath + ": mesh '" + mesh.name + "'";
+}
+
+}  // namespace
+
+TraceScene TraceScene::build(const Scene& scene, const SceneTriangles& triangles) {
+    TraceScene out;
+    const size_t triangleCount = triangles.meshIndex.size();
+
+    // Materials: the scene's, then the glTF default material for meshes without one.
+    for (const Material& m : scene.materials) out.materials.push_back(convertMaterial(m, scene.textures.size()));
+    const uint32_t defaultMaterial = static_cast<uint32_t>(out.materials.size());
+    out.materials.push_back(convertMaterial(Material{}, scene.textures.size()));
+    for (size_t i = 0; i < scene.materials.size(); ++i) {
+        const Material& m = scene.materials[i];
+        if (!(m.ior > 0.0f) || !std::isfinite(m.ior))
+            throw InputError(scene.sourcePath + ": material '" + m.name + "': index of refraction " +
+                             std::to_string(m.ior) + " is not a positive number");
+        if (!isFinite(m.emission()) || !isFinite(vec3(m.baseColorFactor)))
+            throw InputError(scene.sourcePath + ": material '" + m.name + "': colour or emission is not finite");
+    }
+
+    bool needUv[2] = {false, false};
+    for (const TraceMaterial& m : out.materials)
+        for (const TraceTextureRef* ref : {&m.baseColorTexture, &m.emissiveTexture})
+            if (ref->texture >= 0) needUv[ref->texCoord] = true;
+    bool needColors = false;
+    for (const Mesh& mesh : scene.meshes) needColors = needColors || !mesh.colors.empty();
+
+    out.vertices = triangles.vertices;
+    out.normals.resize(3 * triangleCount);
+    out.materialIds.resize(triangleCount);
+    if (needUv[0]) out.uv0.assign(3 * triangleCount, vec2(0.0f));
+    if (needUv[1]) out.uv1.assign(3 * triangleCount, vec2(0.0f));
+    if (needColors) out.colors.assign(3 * triangleCount, vec4(1.0f));
+
+    for (size_t t = 0; t < triangleCount; ++t) {
+        const Mesh& mesh = scene.meshes[triangles.meshIndex[t]];
+        const size_t local = triangles.localIndex[t];
+        out.materialIds[t] = mesh.material >= 0 ? static_cast<uint32_t>(mesh.material) : defaultMaterial;
+        const vec3* v = &out.vertices[3 * t];
+        const vec3 cross = glm::cross(v[1] - v[0], v[2] - v[0]);
+        if (!isFinite(v[0]) || !isFinite(v[1]) || !isFinite(v[2]) || !isFinite(cross))
+            throw InputError(where(scene, mesh) + ": triangle " + std::to_string(local) +
+                             " has a position that is not finite (or too large to square)");
+        const float crossLength = glm::length(cross);
+        const vec3 flat = crossLength > 0.0f ? cross / crossLength : vec3(0.0f, 0.0f, 1.0f);
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t index = mesh.indices[3 * local + k];
+            vec3 n = index < mesh.normals.size() ? mesh.normals[index] : flat;
+            const float length = glm::length(n);
+            if (!isFinite(n) || !(length > 0.0f))
+                throw InputError(where(scene, mesh) + ": normal of vertex " + std::to_string(index) +
+                                 " is zero or not finite");
+            out.normals[3 * t + k] = n / length;
+            if (needUv[0] && index < mesh.uv0.size()) out.uv0[3 * t + k] = mesh.uv0[index];
+            if (needUv[1] && index < mesh.uv1.size()) out.uv1[3 * t + k] = mesh.uv1[index];
+            if (needColors && index < mesh.colors.size()) out.colors[3 * t + k] = mesh.colors[index];
+        }
+    }
+
+    // Textures: RGBA floats one after another.
+    for (const Texture& texture : scene.textures) {
+        TraceTexture t;
+        t.offset = out.texels.size();
+        const Image& image = texture.image;
+        t.width = image.width;
+        t.height = image.height;
+        t.wrapS = wrapCode(texture.wrapS);
+        t.wrapT = wrapCode(texture.wrapT);
+        t.nearest = texture.nearest ? 1u : 0u;
+        if (image.width <= 0 || image.height <= 0 || image.channels <= 0) {
+            // An unreadable image: one white texel, so the factor alone shades.
+            t.width = t.height = 1;
+            out.texels.insert(out.texels.end(), {1.0f, 1.0f, 1.0f, 1.0f});
+        } else {
+            for (int y = 0; y < image.height; ++y)
+                for (int x = 0; x < image.width; ++x) {
+                    vec4 c(0.0f, 0.0f, 0.0f, 1.0f);
+                    for (int ch = 0; ch < glm::min(image.channels, 4); ++ch) c[ch] = image.at(x, y, ch);
+                    if (image.channels < 3) c = vec4(c.x, c.x, c.x, image.channels == 2 ? c.y : 1.0f);
+                    for (int ch = 0; ch < 4; ++ch) out.texels.push_back(std::isfinite(c[ch]) ? c[ch] : 0.0f);
+                }
+        }
+        out.textures.push_back(t);
+    }
+
+    for (const Light& light : scene.lights) {
+        if (!isFinite(light.radiantIntensity()) || !isFinite(light.position) || !isFinite(light.direction))
+            throw InputError(scene.sourcePath + ": light '" + light.name + "' has a value that is not finite");
+        out.lights.push_back(convertLight(light));
+    }
+
+    // Emissive triangles, picked in proportion to area × mean emission (their power up to
+    // the emissive texture).
+    std::vector<double> weights;
+    for (size_t t = 0; t < triangleCount; ++t) {
+        const TraceMaterial& m = out.materials[out.materialIds[t]];
+        if (!(maxComponent(m.emission) > 0.0f)) continue;
+        const vec3* v = &out.vertices[3 * t];
+        const double area = 0.5 * glm::length(glm::cross(v[1] - v[0], v[2] - v[0]));
+        if (!(area > 0.0)) continue;
+        out.emitters.push_back(static_cast<uint32_t>(t));
+        weights.push_back(area * (m.emission.x + m.emission.y + m.emission.z) * (m.doubleSided ? 2.0 : 1.0));
+    }
+    if (!out.emitters.empty()) {
+        double total = 0.0;
+        for (double w : weights) total += w;
+        out.emitterCdf.resize(out.emitters.size());
+        out.emitterSelectPdf.assign(triangleCount, 0.0f);
+        double running = 0.0;
+        float previous = 0.0f;
+        for (size_t i = 0; i < out.emitters.size(); ++i) {
+            running += weights[i];
+            const float cdf = i + 1 == out.emitters.size() ? 1.0f : static_cast<float>(running / total);
+            out.emitterCdf[i] = cdf;
+            // The probability pickEmitter really gives this triangle (float interval width),
+            // so light sampling and its MIS weights agree exactly.
+            out.emitterSelectPdf[out.emitters[i]] = cdf - previous;
+            previous = cdf;
+        }
+    }
+    return out;
+}
+
+TraceSceneView TraceScene::view() const {
+    TraceSceneView v;
+    v.vertices = vertices.data();
+    v.normals = normals.data();
+    v.uv0 = uv0.empty() ? nullptr : uv0.data();
+    v.uv1 = uv1.empty() ? nullptr : uv1.data();
+    v.colors = colors.empty() ? nullptr : colors.data();
+    v.materialIds = materialIds.data();
+    v.triangleCount = static_cast<uint32_t>(materialIds.size());
+    v.materials = materials.data();
+    v.materialCount = static_cast<uint32_t>(materials.size());
+    v.textures = textures.empty() ? nullptr : textures.data();
+    v.texels = texels.empty() ? nullptr : texels.data();
+    v.textureCount = static_cast<uint32_t>(textures.size());
+    v.lights = lights.empty() ? nullptr : lights.data();
+    v.lightCount = static_cast<uint32_t>(lights.size());
+    v.emitters = emitters.empty() ? nullptr : emitters.data();
+    v.emitterCdf = emitterCdf.empty() ? nullptr : emitterCdf.data();
+    v.emitterSelectPdf = emitterSelectPdf.empty() ? nullptr : emitterSelectPdf.data();
+    v.emitterCount = static_cast<uint32_t>(emitters.size());
+    return v;
+}
+
+size_t TraceScene::memoryBytes() const {
+    return vertices.size() * sizeof(vec3) + normals.size() * sizeof(vec3) + uv0.size() * sizeof(vec2) +
+           uv1.size() * sizeof(vec2) + colors.size() * sizeof(vec4) + materialIds.size() * sizeof(uint32_t) +
+           materials.size() * sizeof(TraceMaterial) + textures.size() * sizeof(TraceTexture) +
+           texels.size() * sizeof(float) + lights.size() * sizeof(TraceLight) + emitters.size() * sizeof(uint32_t) +
+           emitterCdf.size() * sizeof(float) + emitterSelectPdf.size() * sizeof(float);
+}
+
+}  // namespace vl
