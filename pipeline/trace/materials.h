@@ -122,7 +122,7 @@ VL_HOSTDEV inline LobeChoice chooseLobe(const ShadingMaterial& m, const vec3& wo
         // Rescale u to [0, 1) for the second choice, transmission versus the diffuse base.
         const float v = (u - fresnel) / glm::max(1.0f - fresnel, 1e-7f);
         if (v < m.transmission) {
-            vec3 t;
+            vec3 t(0.0f);
             if (!refractAbout(wo, ns, etaI / etaT, t)) {
                 // Only reachable through float rounding at the critical angle: reflect.
                 choice.lobe = Lobe::SpecularReflection;
