@@ -113,7 +113,13 @@ Layout resolve(const tinygltf::Model& model, int index, const std::string& where
 
     const size_t elementSize = static_cast<size_t>(layout.componentSize) * layout.components;
     layout.stride = elementSize;
-    if (accessor.bufferView < 0) return layout;  // zeros (spec 3.6.2.4), possibly with sparse values
+    if (accessor.bufferView < 0) {  // zeros (spec 3.6.2.4), possibly with sparse values
+        // Not backed by file bytes, so only this bound keeps a hostile count from allocating gigabytes.
+        if (layout.count > kMaxUnbackedAccessorCount)
+            throw InputError(what + " has no bufferView and count " + std::to_string(layout.count) + ", more than the " +
+                             std::to_string(kMaxUnbackedAccessorCount) + " zero elements this loader accepts");
+        return layout;
+    }
 
     const auto [bytes, length] = bufferViewBytes(model, accessor.bufferView, what);
     const tinygltf::BufferView& view = model.bufferViews[static_cast<size_t>(accessor.bufferView)];

@@ -16,6 +16,8 @@ namespace vl::gltf {
 
 // Above this an accessor is refused rather than allocated (2^28 elements, ~3 GB of vec3).
 constexpr size_t kMaxAccessorCount = size_t(1) << 28;
+// For accessors without a bufferView (zeros plus sparse values), which no file bytes bound.
+constexpr size_t kMaxUnbackedAccessorCount = size_t(1) << 24;
 
 // Components per element for SCALAR and VEC2..4; 0 for matrices and unknown types.
 int vectorComponents(int type);

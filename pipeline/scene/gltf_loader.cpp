@@ -80,6 +80,21 @@ void checkVersionAndExtensions(const std::string& path, const std::string& versi
         }
 }
 
+// URIs are percent-encoded (RFC 3986); "%20" is a space in the file name.
+std::string percentDecoded(const std::string& uri) {
+    std::string out;
+    for (size_t i = 0; i < uri.size(); ++i) {
+        if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
+            std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
+            out += static_cast<char>(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
+            i += 2;
+        } else {
+            out += uri[i];
+        }
+    }
+    return out;
+}
+
 // The same checks on the raw JSON, before tinygltf parses the rest: a file that needs an
 // unsupported extension is refused for that reason, not for the parts tinygltf cannot read
 // because of it (a Draco-compressed accessor has no bufferView). Anything unreadable here is
@@ -113,6 +128,23 @@ void precheckJson(const std::string& path) {
         for (const auto& name : *it)
             if (name.is_string()) required.push_back(name.get<std::string>());
     checkVersionAndExtensions(path, version->get<std::string>(), minVersion, required);
+
+    // tinygltf reports a missing .bin as a bare "File not found"; say which buffer it is.
+    const auto buffers = json.find("buffers");
+    if (buffers == json.end() || !buffers->is_array()) return;
+    for (size_t b = 0; b < buffers->size(); ++b) {
+        const auto& buffer = (*buffers)[b];
+        if (!buffer.is_object()) continue;
+        const auto uri = buffer.find("uri");
+        if (uri == buffer.end() || !uri->is_string()) continue;
+        const std::string text = uri->get<std::string>();
+        if (text.rfind("data:", 0) == 0) continue;
+        const std::filesystem::path file = std::filesystem::path(path).parent_path() / percentDecoded(text);
+        std::error_code ec;
+        if (!std::filesystem::is_regular_file(file, ec))
+            throw InputError(path + ": buffer " + std::to_string(b) + " ('" + text + "') is missing: no file " +
+                             file.string());
+    }
 }
 
 class Loader {
@@ -274,12 +306,14 @@ private:
             ref.transform.scale = vec2(scale->Get(0).GetNumberAsDouble(), scale->Get(1).GetNumberAsDouble());
         }
         ref.transform.rotation = static_cast<float>(number(ext, transform, "rotation", 0.0, what));
-        ref.texCoord = static_cast<int>(number(ext, transform, "texCoord", ref.texCoord, what));
+        const double texCoord = number(ext, transform, "texCoord", ref.texCoord, what);
+        ref.texCoord = texCoord >= 0.0 && texCoord <= 1.0 && texCoord == std::floor(texCoord) ? static_cast<int>(texCoord)
+                                                                                                : -1;
         if (!isFinite(vec3(ref.transform.offset, ref.transform.rotation)) ||
             !isFinite(vec3(ref.transform.scale, 0.0f)))
             fail(what + ": KHR_texture_transform has a non-finite value");
         if (ref.texCoord < 0 || ref.texCoord > 1) {
-            warn(what + " uses TEXCOORD_" + std::to_string(ref.texCoord) + "; only sets 0 and 1 are read, texture ignored");
+            warn(what + " uses a TEXCOORD set other than 0 and 1; texture ignored");
             return TextureRef{};
         }
         ref.texture = sceneTexture(info.index, what);
@@ -404,10 +438,14 @@ private:
             const tinygltf::Node& node = model_.nodes[static_cast<size_t>(index)];
             const glm::dmat4 world = parent * localTransform(index);
             if (!allFinite(world)) fail(nodeName(index) + " has a non-finite transform");
-            if (node.mesh >= 0) addMeshInstance(node.mesh, index, world);
+            if (node.mesh >= 0) {
+                addMeshInstance(node.mesh, index, world);
+                if (node.skin >= 0 && skinnedNodes_++ == 0)
+                    warn(nodeName(index) + " is skinned; skins are not applied, the mesh stays in its bind pose");
+            }
             if (node.camera >= 0) addCamera(node.camera, index, world);
             if (const tinygltf::Value* light = member(node.extensions, "KHR_lights_punctual", "light")) {
-                if (!light->IsNumber()) fail(nodeName(index) + ": KHR_lights_punctual.light is not an index");
+                if (!light->IsInt()) fail(nodeName(index) + ": KHR_lights_punctual.light is not an index");
                 addLight(light->GetNumberAsInt(), index, world);
             }
             for (auto child = node.children.rbegin(); child != node.children.rend(); ++child)
@@ -682,6 +720,7 @@ private:
     std::map<int, bool> reportedImages_;
     std::vector<char> visited_;
     size_t skippedPrimitives_ = 0;
+    size_t skinnedNodes_ = 0;
     std::string firstSkipped_;
 };
 

@@ -88,7 +88,7 @@ TEST_CASE("A missing buffer file is refused naming it", "[scene]") {
     const int position = b.vec3({0, 0, 0, 1, 0, 0, 0, 1, 0});
     const std::string path = b.writeGltf(dir(), "missing_buffer", trianglePrimitive(position));
     std::filesystem::remove(dir() + "/missing_buffer.bin");
-    CHECK_THROWS_WITH(loadGltf(path), Contains(path) && Contains("missing_buffer.bin"));
+    CHECK_THROWS_WITH(loadGltf(path), Contains(path) && Contains("buffer 0 ('missing_buffer.bin') is missing"));
 }
 
 TEST_CASE("NaN and infinite positions are refused naming the vertex", "[scene]") {
@@ -140,4 +140,25 @@ TEST_CASE("Truncated and missing files are refused", "[scene]") {
 
     const std::string notJson = writeText(dir() + "/not_json.gltf", "{\"asset\": {\"version\": \"2.0\"");
     CHECK_THROWS_AS(loadGltf(notJson), InputError);
+}
+
+TEST_CASE("An accessor without a bufferView and a huge count is refused before allocating", "[scene]") {
+    GltfBuilder b;
+    const int position = b.accessor(-1, kFloat, size_t(1) << 40, "VEC3");
+    b.vec3({0, 0, 0});  // keeps a buffer in the file
+    const std::string path = b.writeGltf(dir(), "huge_count", trianglePrimitive(position));
+    CHECK_THROWS_WITH(loadGltf(path), Contains(path) && Contains("accessor " + std::to_string(position)) &&
+                                          Contains("count"));
+}
+
+TEST_CASE("Attributes whose counts differ from POSITION are refused", "[scene]") {
+    GltfBuilder b;
+    const int position = b.vec3({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const int uv = b.vec2({0, 0, 1, 0});
+    const std::string path = b.writeGltf(
+        dir(), "count_mismatch",
+        R"("meshes": [{"name": "Bad", "primitives": [{"attributes": {"POSITION": )" + std::to_string(position) +
+            R"(, "TEXCOORD_0": )" + std::to_string(uv) + "}}]}], " + kScene);
+    CHECK_THROWS_WITH(loadGltf(path), Contains(path) && Contains("TEXCOORD_0") &&
+                                          Contains("accessor " + std::to_string(uv)) && Contains("2 elements"));
 }
