@@ -7,6 +7,10 @@
 #include "trace/triangle_intersect.h"
 
 #include <catch2/catch.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
 
 #include <map>
 #include <utility>
@@ -133,26 +137,30 @@ TEST_CASE("A million random rays from inside a closed icosphere all hit", "[trac
     const Bvh bvh = Bvh::build(sphere.triangles());
     const BvhView view = bvh.view();
     // The icosphere is inscribed in the unit sphere; its inradius is above 0.99 at this level.
-    int misses = 0, anyMisses = 0, outOfRange = 0;
-    for (uint32_t i = 0; i < 1000000; ++i) {
-        Pcg32 rng = Pcg32::forItem(i, 0);
-        Ray ray;
-        ray.origin = 0.98f * glm::pow(rng.next1D(), 1.0f / 3.0f) * sampleUniformSphere(vec2(rng.next1D(), rng.next1D()));
-        ray.direction = sampleUniformSphere(vec2(rng.next1D(), rng.next1D()));
-        // Every tenth ray is axis-aligned or diagonal: zero direction components.
-        if (i % 10 == 0) ray.direction = glm::normalize(vec3(float(i / 10 % 3) - 1.0f, float(i / 30 % 3) - 1.0f, 1.0f));
-        Hit hit;
-        if (!intersectClosest(view, ray, hit)) {
-            ++misses;
-            continue;
+    std::atomic<int> misses{0}, anyMisses{0}, outOfRange{0};
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, 1000000, 10000), [&](const tbb::blocked_range<uint32_t>& range) {
+        for (uint32_t i = range.begin(); i != range.end(); ++i) {
+            Pcg32 rng = Pcg32::forItem(i, 0);
+            Ray ray;
+            ray.origin =
+                0.98f * glm::pow(rng.next1D(), 1.0f / 3.0f) * sampleUniformSphere(vec2(rng.next1D(), rng.next1D()));
+            ray.direction = sampleUniformSphere(vec2(rng.next1D(), rng.next1D()));
+            // Every tenth ray is axis-aligned or diagonal: zero direction components.
+            if (i % 10 == 0)
+                ray.direction = glm::normalize(vec3(float(i / 10 % 3) - 1.0f, float(i / 30 % 3) - 1.0f, 1.0f));
+            Hit hit;
+            if (!intersectClosest(view, ray, hit)) {
+                ++misses;
+                continue;
+            }
+            if (!intersectAny(view, ray)) ++anyMisses;
+            const float r = glm::length(ray.at(hit.t));
+            if (!(r > 0.99f && r < 1.0001f)) ++outOfRange;
         }
-        anyMisses += !intersectAny(view, ray);
-        const float r = glm::length(ray.at(hit.t));
-        outOfRange += !(r > 0.99f && r < 1.0001f);
-    }
-    REQUIRE(misses == 0);
-    REQUIRE(anyMisses == 0);
-    REQUIRE(outOfRange == 0);
+    });
+    REQUIRE(misses.load() == 0);
+    REQUIRE(anyMisses.load() == 0);
+    REQUIRE(outOfRange.load() == 0);
 }
 
 TEST_CASE("Rays through shared vertices and edges of an icosphere hit exactly one triangle", "[trace]") {
