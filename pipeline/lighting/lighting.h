@@ -1,0 +1,78 @@
+// Voxel direct lighting (paper §3.3): takes a VoxelScene (albedo, normal, axis weights,
+// opacity, solid) and the Scene's punctual lights and emissive triangles; gives
+// VoxelScene::radiance = albedo/π × Σ_lights E·weight·(1 − V), the diffuse light each voxel
+// reflects, and VoxelScene::occlusion = the mean visibility loss V over the lights that
+// reach the voxel. Emission stays in its own channel (the bake counts it once).
+//
+// Visibility follows ERRATA eq. (17); the kernels are in lighting/lighting_kernels.h, written
+// once for the TBB pass here and a later CUDA launcher.
+#pragma once
+
+#include "scene/scene.h"
+#include "voxel/voxel_scene.h"
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+
+namespace vl {
+
+class Progress;
+
+// How the normal of a voxel weighs incoming light (DESIGN.md "Normal-weighted attenuation").
+enum class NormalWeighting {
+    Lambert,   // max(N·L, 0) with the voxel's mean normal; 0 where normals cancel
+    Villegas,  // W = N∘N, D_a = max(sign(N_a)·L_a, 0), cos = Σ_a W_a·D_a
+    SixAxis,   // Σ_faces w_face·max(dir_face·L, 0) / Σ w_face over the six axis weights
+};
+
+// How visibility rays walk the grid. Both visit the same voxels in the same order and give
+// bit-identical results; HDDA leaps over empty NanoVDB nodes instead of stepping through them.
+enum class VisibilityTraversal { Hdda, Dda };
+
+// The paper's eq. (18): E = I·C / (K_c + K_l·r + K_q·r²), r in metres.
+struct AttenuationCoefficients {
+    float constant = 0.0f;
+    float linear = 0.0f;
+    float quadratic = 1.0f;
+};
+
+struct LightingSettings {
+    NormalWeighting normalWeights = NormalWeighting::SixAxis;
+    VisibilityTraversal traversal = VisibilityTraversal::Hdda;
+    // Punctual-light falloff. Unset: glTF physical inverse square with the KHR_lights_punctual
+    // range window (spot lights add the extension's smooth cone falloff). Set: eq. (18) for
+    // every point and spot light. A light named in `lightAttenuation` uses its own K's.
+    std::optional<AttenuationCoefficients> attenuation;
+    std::map<std::string, AttenuationCoefficients> lightAttenuation;
+    // Each emissive triangle is sampled at n×n stratified points (fixed jitter per triangle).
+    int emitterStrata = 3;
+    // false: V = 0 everywhere (unshadowed lighting; the benchmark's "no stepping" peer).
+    bool visibility = true;
+    // Worker threads; 0 = TBB's default. Results do not depend on it.
+    int threads = 0;
+};
+
+struct LightingStats {
+    uint64_t voxels = 0;
+    uint64_t lights = 0;            // punctual lights
+    uint64_t emitterTriangles = 0;  // emissive triangles with non-zero area
+    uint64_t emitterSamples = 0;
+    uint64_t voxelLightEvaluations = 0;  // (voxel, light or emitter sample) pairs shaded
+    uint64_t visibilitySteps = 0;        // voxels looked up plus empty nodes leapt over
+    double seconds = 0.0;
+};
+
+const char* toString(NormalWeighting mode);
+// "lambert", "villegas", "six-axis"; SettingsError for anything else.
+NormalWeighting parseNormalWeighting(const std::string& name);
+
+// Fills voxels.radiance and voxels.occlusion (overwriting them). Throws SettingsError for
+// settings out of range (naming the setting, or the light named in lightAttenuation that the
+// scene lacks), InputError for lights or channels that would give NaN (naming the light or
+// the channel). `progress`, when given, advances by one per voxel.
+LightingStats lightVoxels(const Scene& scene, VoxelScene& voxels, const LightingSettings& settings,
+                          Progress* progress = nullptr);
+
+}  // namespace vl

@@ -1,0 +1,466 @@
+// The voxel direct-lighting kernel, written once for the TBB pass (lighting.cpp) and a CUDA
+// launcher: plain structs, plain pointers and the NanoVDB index grid, no allocation.
+//
+// Positions here are in index space (voxel units): voxel (i, j, k) is centred at (i, j, k)
+// and spans [i − ½, i + ½] on each axis. Distances for attenuation are converted to metres.
+//
+// Visibility (ERRATA eq. 17). A ray leaves the receiving voxel toward the light and visits,
+// in order, every voxel it passes through (Amanatides–Woo). Each visited occupied voxel k
+// adds w_k·α_k·(1 − V) with w_k = min(1, 1/(i·d)), where i·d is the distance along the ray
+// from the receiver's centre to the voxel's centre (the projection; exactly i for a ray
+// along an axis, i·√2 along a face diagonal), and a solid voxel makes V = 1. The voxel that
+// holds the light's end point is not between receiver and light and is never visited.
+//
+// Self-occlusion. A voxel averages the surface inside it, and the voxels of the same surface
+// lie beside it, so a ray from the centre toward a grazing light would cross its own
+// surface's neighbours. Two rules keep a surface from shadowing itself:
+//  * the ray starts off the voxel's own box, at c + (½‖n‖₁ + ε)·n along the unit lit-side
+//    normal n (for a floor, on the top face: it then lives in the layer above and cannot pass
+//    under a wall standing on that floor);
+//  * a voxel whose centre lies less than ‖n‖₁ above the receiver's centre along n belongs to
+//    the receiver's surface layer (the voxels a plane through the receiver can touch) and
+//    does not occlude it. For an axis-aligned plane that is exactly its own layer; the layer
+//    above (height 1) does occlude.
+// The emitter end of a ray to an emissive-triangle sample is treated alike: voxels whose
+// centres lie within ½‖n_e‖₁ of the emitter's plane on its front are the emitter's own
+// surface.
+//
+// Empty-space skipping (HDDA). The DDA's state is only the integer voxel coordinate; every
+// plane-crossing time is computed from it afresh, never accumulated. Leaping an empty NanoVDB
+// node (no leaf there) therefore lands on exactly the voxel the one-voxel DDA would reach
+// when it leaves that node (the merge of the three axes' crossing sequences is solved
+// directly), so both traversals visit the same active voxels in the same order and give the
+// same bits. nanovdb::HDDA accumulates its crossing times and nudges them forward by an
+// epsilon, which breaks that agreement at voxel edges and corners; this is its hierarchical
+// idea over the same tree (ReadAccessor::getDim), made exact.
+#pragma once
+
+#include "core/hostdev.h"
+#include "core/math.h"
+
+#include <nanovdb/NanoVDB.h>
+
+#include <cstdint>
+
+namespace vl::lighting {
+
+enum : int { kPointLight = 0, kSpotLight = 1, kDirectionalLight = 2 };
+enum : int { kWeightLambert = 0, kWeightVillegas = 1, kWeightSixAxis = 2 };
+
+// Start of a visibility ray beyond the voxel's own box, in voxels (keeps the start point off
+// the face itself, where rounding would pick either neighbour).
+constexpr float kStartEpsilon = 1e-3f;
+// Tolerance on the surface-layer tests (voxel units), far below any lattice spacing.
+constexpr float kLayerTolerance = 1e-4f;
+// Direction components below this are treated as zero: the ray never crosses that axis.
+constexpr float kParallel = 1e-20f;
+
+struct KernelLight {
+    int type = kPointLight;
+    int paperAttenuation = 0;  // 0: glTF physical; 1: eq. (18) with kc, kl, kq
+    vec3 position{0.0f};       // index space
+    vec3 direction{0.0f, 0.0f, -1.0f};  // unit, the way the light travels
+    vec3 intensity{0.0f};      // colour × intensity: W/sr (point, spot), W/m² (directional)
+    float range = 0.0f;        // metres; 0 = infinite
+    float spotScale = 0.0f;    // KHR_lights_punctual lightAngleScale
+    float spotOffset = 0.0f;   // KHR_lights_punctual lightAngleOffset
+    float kc = 0.0f, kl = 0.0f, kq = 1.0f;
+};
+
+struct EmitterTriangle {
+    vec3 v0{0.0f}, v1{0.0f}, v2{0.0f};  // index space
+    vec3 normal{0.0f, 0.0f, 1.0f};      // unit, front face (counter-clockwise)
+    int doubleSided = 0;
+    uint32_t firstSample = 0;
+    uint32_t sampleCount = 0;
+};
+
+struct EmitterSample {
+    vec3 position{0.0f};  // index space
+    vec3 power{0.0f};     // Le × the sample's share of the triangle's area (W/sr)
+};
+
+struct KernelStats {
+    uint64_t evaluations = 0;
+    uint64_t steps = 0;
+};
+
+using IndexGrid = nanovdb::NanoGrid<int32_t>;
+using IndexAccessor = IndexGrid::AccessorType;
+
+// Everything the kernel reads, as plain pointers (host or device memory alike).
+struct LightingView {
+    const IndexGrid* grid = nullptr;   // voxel coordinate → channel index, −1 in the background
+    const ivec3* coords = nullptr;
+    const vec3* albedo = nullptr;
+    const vec3* normal = nullptr;
+    const float* axisWeights = nullptr;  // 6 per voxel: +X, −X, +Y, −Y, +Z, −Z
+    const float* opacity = nullptr;
+    const uint8_t* solid = nullptr;
+    ivec3 boundsMin{0};  // inclusive bounds of the active voxels
+    ivec3 boundsMax{-1};
+    float voxelSize = 1.0f;  // metres
+    const KernelLight* lights = nullptr;
+    uint32_t lightCount = 0;
+    const EmitterTriangle* emitters = nullptr;
+    uint32_t emitterCount = 0;
+    const EmitterSample* emitterSamples = nullptr;
+    int normalWeighting = kWeightSixAxis;
+    int visibility = 1;
+};
+
+VL_HOSTDEV inline float normL1(const vec3& v) { return glm::abs(v.x) + glm::abs(v.y) + glm::abs(v.z); }
+
+// ---------------------------------------------------------------------------------------
+// Normal weights.
+
+struct NormalWeight {
+    float cosine = 0.0f;
+    vec3 litNormal{0.0f};  // unit normal of the side the light reaches; zero when cosine is 0
+};
+
+// `n` is the voxel's mean normal (unit or zero), `faces` its six axis weights, `L` the unit
+// direction toward the light.
+VL_HOSTDEV inline NormalWeight normalWeight(int mode, const vec3& n, const float* faces, const vec3& L) {
+    NormalWeight result;
+    vec3 litFaces(0.0f);  // the lit faces' weighted directions, for the lit-side normal
+    float cosine = 0.0f;
+    if (mode == kWeightLambert) {
+        cosine = glm::max(glm::dot(n, L), 0.0f);
+    } else if (mode == kWeightVillegas) {
+        for (int a = 0; a < 3; ++a) {
+            if (n[a] == 0.0f) continue;
+            const float sign = n[a] > 0.0f ? 1.0f : -1.0f;
+            const float facing = glm::max(sign * L[a], 0.0f);
+            const float weight = n[a] * n[a];
+            cosine += weight * facing;
+            if (facing > 0.0f) litFaces[a] += weight * sign;
+        }
+    } else {
+        float total = 0.0f;
+        float sum = 0.0f;
+        for (int f = 0; f < 6; ++f) {
+            const int axis = f >> 1;
+            const float sign = (f & 1) ? -1.0f : 1.0f;
+            const float facing = glm::max(sign * L[axis], 0.0f);
+            total += faces[f];
+            sum += faces[f] * facing;
+            if (facing > 0.0f) litFaces[axis] += faces[f] * sign;
+        }
+        cosine = total > 0.0f ? sum / total : 0.0f;
+    }
+    if (!(cosine > 0.0f)) return result;
+    // The mean normal when it faces the light (at a corner it keeps both faces' neighbours in
+    // the surface layer); otherwise the faces that do see the light (thin sheets, corners lit
+    // from one side only).
+    const float nLength = glm::length(n);
+    vec3 side = glm::dot(n, L) > 0.0f && nLength > 0.0f ? n / nLength : litFaces;
+    const float sideLength = glm::length(side);
+    if (!(sideLength > 0.0f)) return result;
+    result.cosine = glm::min(cosine, 1.0f);
+    result.litNormal = side / sideLength;
+    return result;
+}
+
+// Whether any face that counts under `mode` faces the (unnormalised) direction d: the
+// weight of a direction is zero exactly when no such face does, and this is linear in d,
+// so three vertices decide it for a whole triangle.
+VL_HOSTDEV inline bool anyFaceSees(int mode, const vec3& n, const float* faces, const vec3& d) {
+    if (mode == kWeightLambert) return glm::dot(n, d) > 0.0f;
+    if (mode == kWeightVillegas) {
+        for (int a = 0; a < 3; ++a)
+            if ((n[a] > 0.0f && d[a] > 0.0f) || (n[a] < 0.0f && d[a] < 0.0f)) return true;
+        return false;
+    }
+    for (int f = 0; f < 6; ++f) {
+        const float sign = (f & 1) ? -1.0f : 1.0f;
+        if (faces[f] > 0.0f && sign * d[f >> 1] > 0.0f) return true;
+    }
+    return false;
+}
+
+// ---------------------------------------------------------------------------------------
+// Attenuation: irradiance at the receiver from a punctual light, before the normal weight
+// and visibility. `L` points from the receiver to the light; `distance` in metres.
+
+VL_HOSTDEV inline float spotFactor(const KernelLight& light, const vec3& L) {
+    if (light.type != kSpotLight) return 1.0f;
+    const float cd = glm::dot(light.direction, -L);
+    const float a = glm::clamp(cd * light.spotScale + light.spotOffset, 0.0f, 1.0f);
+    return a * a;
+}
+
+VL_HOSTDEV inline vec3 punctualIrradiance(const KernelLight& light, const vec3& L, float distance, float minDistance) {
+    if (light.type == kDirectionalLight) return light.intensity;
+    const float r = glm::max(distance, minDistance);
+    float falloff;
+    if (light.paperAttenuation) {
+        falloff = 1.0f / (light.kc + light.kl * r + light.kq * r * r);
+    } else {
+        float window = 1.0f;
+        if (light.range > 0.0f) {
+            const float q = r / light.range;
+            window = glm::max(glm::min(1.0f - q * q * q * q, 1.0f), 0.0f);
+        }
+        falloff = window / (r * r);
+    }
+    return light.intensity * (falloff * spotFactor(light, L));
+}
+
+// ---------------------------------------------------------------------------------------
+// Visibility stepping.
+
+struct RayEnd {
+    vec3 point{0.0f};
+    vec3 normal{0.0f};     // unit, facing the receiver; zero: no surface at the end
+    float layer = -1.0f;   // voxels with centre height ≤ layer above `point` belong to it
+};
+
+class VoxelWalk {
+public:
+    VL_HOSTDEV VoxelWalk(const vec3& origin, const vec3& dir) : origin_(origin) {
+        for (int a = 0; a < 3; ++a) {
+            step_[a] = dir[a] > kParallel ? 1 : (dir[a] < -kParallel ? -1 : 0);
+            inverse_[a] = step_[a] != 0 ? 1.0f / dir[a] : 0.0f;
+            half_[a] = 0.5f * static_cast<float>(step_[a]);
+        }
+    }
+
+    // Time at which the ray leaves, along `axis`, a voxel with coordinate c on that axis.
+    VL_HOSTDEV float exitTime(int axis, int c) const {
+        if (step_[axis] == 0) return kInfinity;
+        return ((static_cast<float>(c) + half_[axis]) - origin_[axis]) * inverse_[axis];
+    }
+
+    // The axis the ray leaves voxel c through (ties: the lowest axis), and when.
+    VL_HOSTDEV int exitAxis(const ivec3& c, float& time) const {
+        const float t0 = exitTime(0, c.x), t1 = exitTime(1, c.y), t2 = exitTime(2, c.z);
+        int axis = 0;
+        time = t0;
+        if (t1 < time) { axis = 1; time = t1; }
+        if (t2 < time) { axis = 2; time = t2; }
+        return axis;
+    }
+
+    // Leaps the box [lo, lo + size − 1]³ holding c, which is known to be empty. Sets c to the
+    // first voxel after the box that the one-voxel walk reaches, and returns the time it
+    // leaves the box. The walk's crossings are the merge, by (time, axis), of each axis's
+    // increasing crossing times; the box is left at the first crossing past its far face, and
+    // on every other axis the walk has taken exactly the crossings that come before it.
+    VL_HOSTDEV float leapBox(ivec3& c, int size) const {
+        int last[3];
+        float leave[3];
+        for (int a = 0; a < 3; ++a) {
+            const int lo = c[a] & ~(size - 1);
+            last[a] = step_[a] > 0 ? lo + size - 1 : lo;
+            leave[a] = exitTime(a, last[a]);
+        }
+        int exit = 0;
+        if (leave[1] < leave[exit]) exit = 1;
+        if (leave[2] < leave[exit]) exit = 2;
+        const float time = leave[exit];
+        for (int a = 0; a < 3; ++a) {
+            if (a == exit || step_[a] == 0) continue;
+            c[a] = firstCrossingNotBefore(a, c[a], last[a], time, exit);
+        }
+        c[exit] = last[exit] + step_[exit];
+        return time;
+    }
+
+    VL_HOSTDEV int step(int axis) const { return step_[axis]; }
+
+private:
+    VL_HOSTDEV bool crossesBefore(int axis, int c, float time, int exitAxis) const {
+        const float t = exitTime(axis, c);
+        return t < time || (t == time && axis < exitAxis);
+    }
+
+    // The coordinate along `axis` at time `time`: the first c in [from, last] (walk order)
+    // whose crossing does not come before the exit crossing.
+    VL_HOSTDEV int firstCrossingNotBefore(int axis, int from, int last, float time, int exitAxis) const {
+        const int s = step_[axis];
+        const float lowF = static_cast<float>(s > 0 ? from : last);
+        const float highF = static_cast<float>(s > 0 ? last : from);
+        const float guessF = glm::clamp(glm::floor(time / inverse_[axis] + origin_[axis] + 0.5f), lowF, highF);
+        int c = static_cast<int>(guessF);
+        while (c != last && crossesBefore(axis, c, time, exitAxis)) c += s;
+        while (c != from && !crossesBefore(axis, c - s, time, exitAxis)) c -= s;
+        return c;
+    }
+
+    vec3 origin_;
+    vec3 inverse_;
+    vec3 half_;
+    int step_[3];
+};
+
+// V along the ray origin + t·dir, t in [0, tEnd) (index space, dir unit). `receiver` is the
+// receiving voxel's centre and `litNormal` its unit lit-side normal (the surface layer).
+template <bool Hierarchical>
+VL_HOSTDEV inline float occlusionAlongRay(const LightingView& view, IndexAccessor& accessor, const vec3& receiver,
+                                          const vec3& litNormal, const vec3& origin, const vec3& dir, float tEnd,
+                                          const RayEnd& end, uint64_t& steps) {
+    const VoxelWalk walk(origin, dir);
+    const float receiverLayer = normL1(litNormal) - kLayerTolerance;
+    const float endLayer = end.layer + kLayerTolerance;
+    ivec3 c(static_cast<int>(glm::floor(origin.x + 0.5f)), static_cast<int>(glm::floor(origin.y + 0.5f)),
+            static_cast<int>(glm::floor(origin.z + 0.5f)));
+    float V = 0.0f;
+    for (;;) {
+        bool past = false;
+        for (int a = 0; a < 3; ++a) {
+            const int s = walk.step(a);
+            past = past || (c[a] > view.boundsMax[a] && s >= 0) || (c[a] < view.boundsMin[a] && s <= 0);
+        }
+        if (past) break;
+        float tExit;
+        const int axis = walk.exitAxis(c, tExit);
+        if (!(tExit < tEnd)) break;  // this voxel holds the end point
+        const nanovdb::Coord ijk(c.x, c.y, c.z);
+        ++steps;
+        if (Hierarchical) {
+            const uint32_t dim = accessor.getDim(ijk, 0);
+            if (dim > 1 && !accessor.isActive(ijk)) {
+                if (!(walk.leapBox(c, static_cast<int>(dim)) < tEnd)) break;
+                continue;
+            }
+        }
+        const int32_t index = accessor.getValue(ijk);
+        if (index >= 0) {
+            const vec3 centre(c);
+            const vec3 fromReceiver = centre - receiver;
+            const bool ownSurface = glm::dot(litNormal, fromReceiver) < receiverLayer;
+            const bool endSurface = end.layer >= 0.0f && glm::dot(end.normal, centre - end.point) <= endLayer;
+            if (!ownSurface && !endSurface) {
+                if (view.solid[index]) return 1.0f;
+                const float alpha = glm::clamp(view.opacity[index], 0.0f, 1.0f);
+                const float distance = glm::dot(fromReceiver, dir);
+                const float weight = distance > 1.0f ? 1.0f / distance : 1.0f;
+                V += weight * alpha * (1.0f - V);
+                if (V >= 1.0f) return 1.0f;
+            }
+        }
+        c[axis] += walk.step(axis);
+    }
+    return V;
+}
+
+// V for a ray from the receiving voxel toward `target` (index space; tEnd = infinity for a
+// directional light, where `target` is unused and `towardLight` is the direction).
+template <bool Hierarchical>
+VL_HOSTDEV inline float visibilityLoss(const LightingView& view, IndexAccessor& accessor, const vec3& receiver,
+                                       const vec3& litNormal, const vec3& towardLight, const vec3& target,
+                                       bool toInfinity, const RayEnd& end, uint64_t& steps) {
+    const vec3 origin = receiver + (0.5f * normL1(litNormal) + kStartEpsilon) * litNormal;
+    if (toInfinity)
+        return occlusionAlongRay<Hierarchical>(view, accessor, receiver, litNormal, origin, towardLight, kInfinity, end,
+                                               steps);
+    const vec3 segment = target - origin;
+    const float length = glm::length(segment);
+    // A light between the receiver's centre and the start point has nothing in front of it.
+    if (!(length > 1e-6f) || glm::dot(segment, litNormal) <= 0.0f) return 0.0f;
+    return occlusionAlongRay<Hierarchical>(view, accessor, receiver, litNormal, origin, segment / length, length, end,
+                                           steps);
+}
+
+// ---------------------------------------------------------------------------------------
+// One voxel, all lights.
+
+struct VoxelLighting {
+    vec3 radiance{0.0f};
+    float occlusion = 0.0f;
+};
+
+template <bool Hierarchical>
+VL_HOSTDEV inline VoxelLighting shadeVoxel(const LightingView& view, IndexAccessor& accessor, uint32_t i,
+                                           KernelStats& stats) {
+    const vec3 receiver(view.coords[i]);
+    const vec3 n = view.normal[i];
+    const float* faces = view.axisWeights + 6 * static_cast<size_t>(i);
+    const float h = view.voxelSize;
+    const float minDistance = 0.5f * h;
+    vec3 irradiance(0.0f);
+    float occlusionSum = 0.0f;
+    uint32_t lightsReaching = 0;
+
+    for (uint32_t l = 0; l < view.lightCount; ++l) {
+        const KernelLight& light = view.lights[l];
+        vec3 L;
+        float distance = 0.0f;
+        if (light.type == kDirectionalLight) {
+            L = -light.direction;
+        } else {
+            const vec3 toLight = light.position - receiver;
+            const float d = glm::length(toLight);
+            if (!(d > 1e-6f)) continue;  // the light sits at the voxel's centre: no direction
+            L = toLight / d;
+            distance = d * h;
+        }
+        const NormalWeight w = normalWeight(view.normalWeighting, n, faces, L);
+        if (!(w.cosine > 0.0f)) continue;
+        const vec3 E = punctualIrradiance(light, L, distance, minDistance);
+        if (!(maxComponent(E) > 0.0f)) continue;
+        ++stats.evaluations;
+        float V = 0.0f;
+        if (view.visibility)
+            V = visibilityLoss<Hierarchical>(view, accessor, receiver, w.litNormal, L, light.position,
+                                             light.type == kDirectionalLight, RayEnd{}, stats.steps);
+        irradiance += E * (w.cosine * (1.0f - V));
+        occlusionSum += V;
+        ++lightsReaching;
+    }
+
+    for (uint32_t e = 0; e < view.emitterCount; ++e) {
+        const EmitterTriangle& tri = view.emitters[e];
+        // Behind the emitter (or in its plane): no sample can reach the voxel's centre.
+        const float side = glm::dot(tri.normal, receiver - tri.v0);
+        if (side == 0.0f || (side < 0.0f && !tri.doubleSided)) continue;
+        // Behind every face of the voxel that counts.
+        if (!anyFaceSees(view.normalWeighting, n, faces, tri.v0 - receiver) &&
+            !anyFaceSees(view.normalWeighting, n, faces, tri.v1 - receiver) &&
+            !anyFaceSees(view.normalWeighting, n, faces, tri.v2 - receiver))
+            continue;
+        const vec3 frontNormal = side > 0.0f ? tri.normal : -tri.normal;
+        const float emitterLayer = 0.5f * normL1(tri.normal);
+        float triangleLoss = 0.0f;
+        uint32_t samplesReaching = 0;
+        for (uint32_t k = 0; k < tri.sampleCount; ++k) {
+            const EmitterSample& sample = view.emitterSamples[tri.firstSample + k];
+            const vec3 toSample = sample.position - receiver;
+            const float d = glm::length(toSample);
+            if (!(d > 1e-6f)) continue;
+            const vec3 L = toSample / d;
+            const float cosEmitter = -glm::dot(frontNormal, L);
+            if (!(cosEmitter > 0.0f)) continue;
+            const NormalWeight w = normalWeight(view.normalWeighting, n, faces, L);
+            if (!(w.cosine > 0.0f)) continue;
+            const float r = glm::max(d * h, minDistance);
+            const vec3 E = sample.power * (cosEmitter / (r * r));
+            if (!(maxComponent(E) > 0.0f)) continue;
+            ++stats.evaluations;
+            float V = 0.0f;
+            if (view.visibility) {
+                RayEnd end;
+                end.point = sample.position;
+                end.normal = frontNormal;
+                end.layer = emitterLayer;
+                V = visibilityLoss<Hierarchical>(view, accessor, receiver, w.litNormal, L, sample.position, false, end,
+                                                 stats.steps);
+            }
+            irradiance += E * (w.cosine * (1.0f - V));
+            triangleLoss += V;
+            ++samplesReaching;
+        }
+        if (samplesReaching > 0) {
+            occlusionSum += triangleLoss / static_cast<float>(samplesReaching);
+            ++lightsReaching;
+        }
+    }
+
+    VoxelLighting result;
+    result.radiance = view.albedo[i] * kInvPi * irradiance;
+    result.occlusion = lightsReaching > 0 ? occlusionSum / static_cast<float>(lightsReaching) : 0.0f;
+    return result;
+}
+
+}  // namespace vl::lighting
