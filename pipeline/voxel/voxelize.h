@@ -12,7 +12,11 @@
 //   alpha for BLEND, times (1 − transmission). Every channel is a mean over the pieces
 //   weighted by that visible area.
 // - albedo: base colour (factor × texture × COLOR_0) sampled on texelSamples² points spread
-//   over each piece by area, not at its vertices; emission likewise (emissionAt).
+//   over each piece by area, not at its vertices; emission likewise (emissionAt). The
+//   points are the centroids of a regular subdivision (exact for colours linear over the
+//   piece); texture detail finer than their spacing is point-sampled and can alias, as
+//   Texture has no mip levels to prefilter with. Materials without textures or varying
+//   COLOR_0 are not sampled at all: their colour is exact.
 // - normal: the mean geometric normal (winding), unit, or zero where the normals cancel.
 // - axisWeights: Σ area·max(±n_a, 0) per signed axis, in voxel-face units (area / h²).
 //   A doubleSided material is a surface on both sides, so its pieces add their area to

@@ -371,6 +371,60 @@ TEST_CASE("Vertex colours are averaged over the area each voxel covers", "[voxel
     }
 }
 
+TEST_CASE("A texture is averaged over the piece and not read at its vertices", "[voxel]") {
+    // One voxel-sized quad, black where x < 0 and white where x > 0 (one period of a
+    // two-texel nearest texture, repeated): every vertex of the quad sees black (u = 0 and
+    // u = 1 wrap to texel 0), so sampling at the vertices would give 0; the mean is ½.
+    Texture stripes;
+    stripes.name = "stripes";
+    stripes.image = Image(2, 1, 4, 1.0f);
+    stripes.image.setRgb(0, 0, vec3(0.0f));
+    stripes.nearest = true;
+    Material material = colouredMaterial(vec3(1.0f));
+    material.baseColorTexture.texture = 0;
+    Mesh mesh;
+    mesh.name = "striped quad";
+    mesh.material = 0;
+    mesh.positions = {{-0.5f, -0.5f, 0.3f}, {0.5f, -0.5f, 0.3f}, {0.5f, 0.5f, 0.3f}, {-0.5f, 0.5f, 0.3f}};
+    for (const vec3& p : mesh.positions) mesh.uv0.push_back(vec2(p.x + 0.5f, 0.5f));
+    mesh.indices = {0, 1, 2, 0, 2, 3};
+    Scene scene = sceneOf({mesh}, {material});
+    scene.textures = {stripes};
+    VoxelSettings settings;
+    settings.voxelSize = 1.0;
+    const VoxelScene voxels = voxelize(scene, settings);
+    REQUIRE(voxels.size() == 1);
+    CHECK(voxels.albedo[0].x == Approx(0.5f).margin(0.05f));
+    CHECK(voxels.albedo[0].x == voxels.albedo[0].z);
+    CHECK(voxels.opacity[0] == Approx(1.0f).epsilon(1e-6));
+}
+
+TEST_CASE("Alpha masks and transmission reduce coverage", "[voxel]") {
+    // One voxel-sized quad: opaque → α = 1; BLEND at alpha ¼ → ¼; MASK below the cutoff →
+    // no voxel; half transmissive → ½.
+    auto coverage = [](Material material) {
+        Mesh mesh;
+        mesh.name = "quad";
+        mesh.material = 0;
+        mesh.positions = {{-0.5f, -0.5f, 0.3f}, {0.5f, -0.5f, 0.3f}, {0.5f, 0.5f, 0.3f}, {-0.5f, 0.5f, 0.3f}};
+        mesh.indices = {0, 1, 2, 0, 2, 3};
+        VoxelSettings settings;
+        settings.voxelSize = 1.0;
+        const VoxelScene voxels = voxelize(sceneOf({mesh}, {material}), settings);
+        return voxels.size() == 1 ? double(voxels.opacity[0]) : -double(voxels.size());
+    };
+    Material m = colouredMaterial(vec3(0.5f));
+    CHECK(coverage(m) == Approx(1.0));
+    m.alphaMode = AlphaMode::Blend;
+    m.baseColorFactor.w = 0.25f;
+    CHECK(coverage(m) == Approx(0.25));
+    m.alphaMode = AlphaMode::Mask;
+    CHECK(coverage(m) == 0.0);  // no voxel at all
+    m = colouredMaterial(vec3(0.5f));
+    m.transmission = 0.5f;
+    CHECK(coverage(m) == Approx(0.5));
+}
+
 TEST_CASE("Icosphere voxel normals point outward", "[voxel]") {
     const vec3 centre(0.3f, -0.2f, 0.7f);
     for (bool doubleSided : {false, true}) {
