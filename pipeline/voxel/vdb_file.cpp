@@ -7,6 +7,9 @@
 #include <openvdb/openvdb.h>
 
 #include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <fstream>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -266,6 +269,47 @@ std::string stringMeta(const openvdb::MetaMap& meta, const char* key) {
     return value ? value->value() : std::string();
 }
 
+// OpenVDB stamps every file with a random UUID (Archive::writeHeader), so two writes of the
+// same grids differ in 36 header bytes. Replace it with one derived from the bytes after
+// the header: same grids, same file, as DESIGN.md asks of every output. The header is
+// magic (8 bytes), file version, library major and minor (4 each), a has-offsets byte, then
+// the UUID as 36 ASCII characters; a file laid out otherwise is left alone.
+void makeUuidDeterministic(const std::string& path) {
+    constexpr std::streamoff kUuidOffset = 8 + 4 + 4 + 4 + 1;
+    constexpr size_t kUuidLength = 36;
+    std::fstream file(path, std::ios::in | std::ios::out | std::ios::binary);
+    std::string header(kUuidOffset + kUuidLength, '\0');
+    if (!file.read(header.data(), std::streamsize(header.size()))) return;
+    const std::string magic("\x20\x42\x44\x56\0\0\0\0", 8);  // OPENVDB_MAGIC, little-endian
+    if (header.compare(0, 8, magic) != 0) return;
+    for (size_t i = 0; i < kUuidLength; ++i) {
+        const char c = header[kUuidOffset + i];
+        const bool dash = i == 8 || i == 13 || i == 18 || i == 23;
+        if (dash ? c != '-' : !std::isxdigit(static_cast<unsigned char>(c))) return;
+    }
+    // Two FNV-1a 64-bit hashes with different offset bases make the 128 bits.
+    uint64_t h0 = 14695981039346656037ull, h1 = 0x6c62272e07bb0142ull;
+    constexpr uint64_t kPrime = 1099511628211ull;
+    char buffer[1 << 16];
+    while (file.read(buffer, sizeof buffer) || file.gcount() > 0) {
+        for (std::streamsize i = 0; i < file.gcount(); ++i) {
+            const auto byte = static_cast<unsigned char>(buffer[i]);
+            h0 = (h0 ^ byte) * kPrime;
+            h1 = (h1 ^ byte) * kPrime;
+        }
+    }
+    char hex[33];
+    std::snprintf(hex, sizeof hex, "%016llx%016llx", static_cast<unsigned long long>(h0),
+                  static_cast<unsigned long long>(h1));
+    const std::string h(hex);
+    const std::string uuid = h.substr(0, 8) + "-" + h.substr(8, 4) + "-" + h.substr(12, 4) + "-" + h.substr(16, 4) +
+                             "-" + h.substr(20, 12);
+    file.clear();
+    file.seekp(kUuidOffset);
+    if (!file.write(uuid.data(), std::streamsize(uuid.size())) || !file.flush())
+        throw Error(path + ": cannot finish writing the voxel grids");
+}
+
 }  // namespace
 
 void writeVoxelFile(const VoxelScene& voxels, const std::string& path, const std::vector<ExtraGrid>& extra) {
@@ -339,6 +383,7 @@ void writeVoxelFile(const VoxelScene& voxels, const std::string& path, const std
         } catch (const openvdb::Exception& e) {
             throw Error(path + ": cannot write the voxel grids (" + e.what() + ")");
         }
+        makeUuidDeterministic(tempPath);
     });
 }
 

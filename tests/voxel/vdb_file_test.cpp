@@ -109,6 +109,26 @@ TEST_CASE("A VoxelScene written to .vdb reads back bit for bit", "[voxel]") {
     CHECK(axisMismatches == 0);
 }
 
+TEST_CASE("Writing the same scene twice gives the same bytes", "[voxel]") {
+    const VoxelScene scene = syntheticScene(true);
+    const std::string dir = test::tempDir("vdb_file");
+    const auto bytesOf = [](const std::string& path) {
+        std::ifstream in(path, std::ios::binary);
+        return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    };
+    writeVoxelFile(scene, dir + "/first.vdb");
+    writeVoxelFile(scene, dir + "/second.vdb");
+    const std::string first = bytesOf(dir + "/first.vdb");
+    REQUIRE(first.size() > 1000);
+    CHECK(first == bytesOf(dir + "/second.vdb"));
+    // A different scene gets a different file identity (the UUID in the header).
+    VoxelScene other = scene;
+    other.opacity[0] = 0.5f;
+    writeVoxelFile(other, dir + "/third.vdb");
+    CHECK(bytesOf(dir + "/third.vdb").substr(21, 36) != first.substr(21, 36));
+    CHECK(readVoxelFile(dir + "/second.vdb").opacity == scene.opacity);
+}
+
 TEST_CASE("The .vdb carries the DESIGN.md grid names and file metadata", "[voxel]") {
     const VoxelScene scene = syntheticScene(true);
     const std::string path = test::tempDir("vdb_file") + "/names.vdb";
