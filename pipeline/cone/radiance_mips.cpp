@@ -1,0 +1,252 @@
+#include "cone/radiance_mips.h"
+
+#include "core/error.h"
+
+#include <nanovdb/util/GridBuilder.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <utility>
+
+namespace vl {
+
+namespace {
+
+constexpr int kCoordLimit = 1 << 20;  // packed sort keys hold 21 bits per axis
+constexpr size_t kSmallLevelVoxels = 8;
+
+int floorHalf(int c) { return c >= 0 ? c / 2 : -((1 - c) / 2); }
+
+uint64_t packCoord(const ivec3& c) {
+    const auto axis = [](int v) { return static_cast<uint64_t>(v + kCoordLimit); };
+    return (axis(c.x) << 42) | (axis(c.y) << 21) | axis(c.z);
+}
+
+std::string voxelName(const VoxelScene& voxels, size_t i) {
+    const ivec3& c = voxels.coords[i];
+    return "voxel " + std::to_string(i) + " (" + std::to_string(c.x) + ", " + std::to_string(c.y) + ", " +
+           std::to_string(c.z) + ")";
+}
+
+void checkInputs(const VoxelScene& voxels, const std::vector<vec3>& radiance) {
+    const std::string where = "buildRadianceMips(" + voxels.sourceScene + "): ";
+    const size_t n = voxels.size();
+    if (radiance.size() != n)
+        throw Error(where + "radiance has " + std::to_string(radiance.size()) + " values for " +
+                    std::to_string(n) + " voxels (run the lighting stage first)");
+    if (voxels.opacity.size() != n || voxels.solid.size() != n)
+        throw Error(where + "opacity or solid does not match the " + std::to_string(n) + " voxels");
+    if (n > 0 && !(voxels.voxelSize > 0.0))
+        throw Error(where + "voxel size " + std::to_string(voxels.voxelSize) + " is not positive");
+    for (size_t i = 0; i < n; ++i) {
+        const ivec3& c = voxels.coords[i];
+        if (glm::any(glm::greaterThanEqual(glm::abs(c), ivec3(kCoordLimit))))
+            throw Error(where + voxelName(voxels, i) + " lies beyond ±2^20 voxels");
+        const vec3& r = radiance[i];
+        if (!isFinite(r) || glm::any(glm::lessThan(r, vec3(0.0f))))
+            throw InputError(where + "radiance of " + voxelName(voxels, i) + " is negative, NaN or Inf");
+        const float a = voxels.opacity[i];
+        if (!voxels.solid[i] && !(a >= 0.0f && a <= 1.0f))
+            throw InputError(where + "opacity of " + voxelName(voxels, i) + " is outside [0, 1]");
+    }
+}
+
+MipTexel makeTexel(const vec3& premultiplied, float alpha) {
+    MipTexel texel;
+    texel.radiance = premultiplied;
+    texel.alpha = alpha;
+    texel.density = opticalDepth(alpha);
+    return texel;
+}
+
+MipLevel levelZero(const VoxelScene& voxels, const std::vector<vec3>& radiance) {
+    MipLevel level;
+    level.voxelSize = voxels.voxelSize;
+    level.coords = voxels.coords;
+    level.values.resize(voxels.size());
+    level.texels.resize(voxels.size());
+    for (size_t i = 0; i < voxels.size(); ++i) {
+        const float alpha = voxels.solid[i] ? 1.0f : voxels.opacity[i];
+        level.values[i] = vec4(alpha * radiance[i], alpha);
+        level.texels[i] = makeTexel(alpha * radiance[i], alpha);
+    }
+    return level;
+}
+
+// One parent from its children (slot = child − 2·parent, x + 2y + 4z; −1 where absent).
+void makeParent(const MipLevel& children, const int (&slots)[8], vec4& value, MipTexel* texels) {
+    value = vec4(0.0f);
+    for (int slot : slots)
+        if (slot >= 0) value += children.values[size_t(slot)];
+    value *= 0.125f;  // exact in binary floating point
+
+    for (int face = 0; face < kFaceCount; ++face) {
+        const int axis = face / 2;
+        const bool towardsNegative = face % 2 == 1;
+        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        const auto childTexel = [&](int along, int du, int dv) {
+            ivec3 offset(0);
+            offset[axis] = along;
+            offset[u] = du;
+            offset[v] = dv;
+            const int slot = slots[offset.x + 2 * offset.y + 4 * offset.z];
+            if (slot < 0) return MipTexel{};
+            return children.texels[size_t(slot) * size_t(children.facesPerVoxel) +
+                                   size_t(children.facesPerVoxel == 1 ? 0 : face)];
+        };
+        vec3 radiance(0.0f);
+        float alpha = 0.0f;
+        for (int du = 0; du < 2; ++du)
+            for (int dv = 0; dv < 2; ++dv) {
+                // Travelling along +axis the lower child is met first.
+                const MipTexel front = childTexel(towardsNegative ? 1 : 0, du, dv);
+                const MipTexel back = childTexel(towardsNegative ? 0 : 1, du, dv);
+                radiance += front.radiance + (1.0f - front.alpha) * back.radiance;
+                alpha += front.alpha + (1.0f - front.alpha) * back.alpha;
+            }
+        texels[face] = makeTexel(0.25f * radiance, 0.25f * alpha);
+    }
+}
+
+// Children are grouped by a sort of unique keys and each parent reads only its own
+// children, so the result is the same bytes at any thread count.
+MipLevel parentLevel(const MipLevel& children, double baseVoxelSize, int level) {
+    const size_t n = children.coords.size();
+    std::vector<std::pair<uint64_t, uint32_t>> keyed(n);
+    for (size_t i = 0; i < n; ++i) {
+        const ivec3& c = children.coords[i];
+        keyed[i] = {packCoord(ivec3(floorHalf(c.x), floorHalf(c.y), floorHalf(c.z))), static_cast<uint32_t>(i)};
+    }
+    tbb::parallel_sort(keyed.begin(), keyed.end());
+    std::vector<size_t> groupBegin;
+    for (size_t i = 0; i < n; ++i)
+        if (i == 0 || keyed[i].first != keyed[i - 1].first) groupBegin.push_back(i);
+    groupBegin.push_back(n);
+    const size_t parentCount = groupBegin.size() - 1;
+
+    MipLevel parents;
+    parents.voxelSize = children.voxelSize * 2.0;
+    parents.centreOffset = vec3(static_cast<float>((std::ldexp(1.0, level) - 1.0) * 0.5 * baseVoxelSize));
+    parents.facesPerVoxel = kFaceCount;
+    parents.coords.resize(parentCount);
+    parents.values.resize(parentCount);
+    parents.texels.resize(parentCount * kFaceCount);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, parentCount), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t p = range.begin(); p != range.end(); ++p) {
+            const ivec3 first = children.coords[keyed[groupBegin[p]].second];
+            const ivec3 parent(floorHalf(first.x), floorHalf(first.y), floorHalf(first.z));
+            int slots[8] = {-1, -1, -1, -1, -1, -1, -1, -1};
+            for (size_t j = groupBegin[p]; j < groupBegin[p + 1]; ++j) {
+                const ivec3 d = children.coords[keyed[j].second] - 2 * parent;
+                slots[d.x + 2 * d.y + 4 * d.z] = static_cast<int>(keyed[j].second);
+            }
+            parents.coords[p] = parent;
+            makeParent(children, slots, parents.values[p], &parents.texels[p * kFaceCount]);
+        }
+    });
+    return parents;
+}
+
+bool isSmallEnough(const MipLevel& level) {
+    if (level.coords.size() <= kSmallLevelVoxels) return true;
+    ivec3 lo = level.coords.front(), hi = level.coords.front();
+    for (const ivec3& c : level.coords) {
+        lo = glm::min(lo, c);
+        hi = glm::max(hi, c);
+    }
+    return glm::all(glm::lessThanEqual(hi - lo, ivec3(1)));
+}
+
+nanovdb::GridHandle<nanovdb::HostBuffer> toIndexGrid(const MipLevel& level, int k) {
+    nanovdb::GridBuilder<int32_t> builder(-1);
+    auto accessor = builder.getAccessor();
+    for (size_t i = 0; i < level.coords.size(); ++i) {
+        const ivec3& c = level.coords[i];
+        accessor.setValue(nanovdb::Coord(c.x, c.y, c.z), static_cast<int32_t>(i));
+    }
+    const vec3 o = level.centreOffset;
+    return builder.getHandle<>(level.voxelSize, nanovdb::Vec3d(o.x, o.y, o.z), "mip_index" + std::to_string(k));
+}
+
+}  // namespace
+
+const MipIndexGrid* RadianceMips::indexGrid(int k) const {
+    return grids_.at(static_cast<size_t>(k)).grid<int32_t>();
+}
+
+MipView RadianceMips::view() const {
+    MipView view;
+    view.levelCount = levelCount();
+    view.voxelSize = static_cast<float>(voxelSize_);
+    view.boundsMin = boundsMin_;
+    view.boundsMax = boundsMax_;
+    for (int k = 0; k < view.levelCount; ++k) {
+        view.levels[k].index = indexGrid(k);
+        view.levels[k].texels = levels_[size_t(k)].texels.data();
+        view.levels[k].facesPerVoxel = levels_[size_t(k)].facesPerVoxel;
+    }
+    return view;
+}
+
+size_t RadianceMips::memoryBytes() const {
+    size_t bytes = 0;
+    for (const auto& handle : grids_) bytes += handle.size();
+    for (const MipLevel& level : levels_)
+        bytes += level.coords.size() * sizeof(ivec3) + level.values.size() * sizeof(vec4) +
+                 level.texels.size() * sizeof(MipTexel);
+    return bytes;
+}
+
+RadianceMips buildRadianceMips(const VoxelScene& voxels) { return buildRadianceMips(voxels, voxels.radiance); }
+
+RadianceMips buildRadianceMips(const VoxelScene& voxels, const std::vector<vec3>& radiance) {
+    checkInputs(voxels, radiance);
+    RadianceMips mips;
+    mips.voxelSize_ = voxels.voxelSize;
+    if (voxels.size() == 0) return mips;
+
+    ivec3 lo = voxels.coords.front(), hi = voxels.coords.front();
+    for (const ivec3& c : voxels.coords) {
+        lo = glm::min(lo, c);
+        hi = glm::max(hi, c);
+    }
+    const float h = static_cast<float>(voxels.voxelSize);
+    mips.boundsMin_ = (vec3(lo) - vec3(0.5f)) * h;
+    mips.boundsMax_ = (vec3(hi) + vec3(0.5f)) * h;
+
+    mips.levels_.push_back(levelZero(voxels, radiance));
+    while (!isSmallEnough(mips.levels_.back()) && mips.levelCount() < MipView::kMaxLevels) {
+        const int k = mips.levelCount();
+        mips.levels_.push_back(parentLevel(mips.levels_.back(), voxels.voxelSize, k));
+    }
+    for (int k = 0; k < mips.levelCount(); ++k) mips.grids_.push_back(toIndexGrid(mips.levels_[k], k));
+    return mips;
+}
+
+std::vector<ExtraGrid> mipGridsForFile(const RadianceMips& mips) {
+    std::vector<ExtraGrid> grids;
+    for (int k = 0; k < mips.levelCount(); ++k) {
+        const MipLevel& level = mips.level(k);
+        ExtraGrid radiance, opacity;
+        radiance.name = "radiance_mip" + std::to_string(k);
+        opacity.name = "opacity_mip" + std::to_string(k);
+        radiance.voxelSize = opacity.voxelSize = level.voxelSize;
+        radiance.coords = opacity.coords = level.coords;
+        radiance.vectors.reserve(level.values.size());
+        opacity.scalars.reserve(level.values.size());
+        for (const vec4& v : level.values) {
+            radiance.vectors.emplace_back(v.x, v.y, v.z);
+            opacity.scalars.push_back(v.w);
+        }
+        grids.push_back(std::move(radiance));
+        grids.push_back(std::move(opacity));
+    }
+    return grids;
+}
+
+}  // namespace vl

@@ -1,0 +1,136 @@
+// The radiance mip chain that cones sample: takes a lit VoxelScene (radiance, opacity,
+// solid), gives per level a sparse NanoVDB index grid (coord → texel index, −1 outside) over
+// plain texel arrays, and a plain view of them for the kernels in cone_trace.h.
+//
+// Level 0 is the voxels: α = opacity (1 for a solid voxel), value = (α·radiance, α).
+// Level k voxel I (size 2^k·h) has the 8 children 2I + {0,1}³ at level k−1 and is active
+// when any child is. It keeps two things:
+//  - `values`: the plain average of its children's (α·radiance, α), empty children zero,
+//    so Σ value·volume is the same at every level. This is the isotropic mip written to
+//    grids.vdb.
+//  - `texels`: what cones sample, one per direction of travel (+X, −X, +Y, −Y, +Z, −Z):
+//    the children composited front to back in pairs along that axis (c = c_f + (1−α_f)c_b,
+//    α = α_f + (1−α_f)α_b), then the 4 pairs averaged (Crassin et al. 2011, anisotropic
+//    voxels). Why not the plain average: a wall one voxel thick averages to α = 2^−k at
+//    level k, so every cone wider than a voxel sees through walls (a closed box of radiance
+//    L gathers a few percent of π·L). Composited along the travel axis the wall keeps α = 1
+//    for cones crossing it and coverage for cones running along it. A uniform medium of
+//    opacity α₀ gets α_k = 1 − (1 − α₀)^(2^k): Beer–Lambert at every level.
+// Each texel also stores its optical depth σ = −ln(1 − min(α, 1 − 10⁻³)) per voxel length;
+// cone_trace.h interpolates σ rather than α for opacity (see there).
+// Levels are built until one has at most 8 voxels or spans at most 2 voxels on every axis
+// (at most MipView::kMaxLevels).
+//
+// Index convention. Level 0 follows voxel_scene.h: voxel i centred at i·h. A level-k voxel
+// covers level-0 voxels 2^k·I … 2^k·I + 2^k − 1, so its centre is their centroid,
+// (2^k·I + (2^k − 1)/2)·h — not 2^k·I·h. Each level's NanoVDB map carries that translation,
+// and mipIndexPosition() applies it, so a level-k parent's centre is exactly the corner
+// shared by its 8 children at level k−1.
+//
+// The radiance channel is the light voxels reflect (lighting stage); emission is not in it
+// and never enters the mips, so cones never count an emitter that the receiver's exact
+// direct term already holds.
+#pragma once
+
+#include "core/math.h"
+#include "voxel/vdb_file.h"
+#include "voxel/voxel_scene.h"
+
+#include <nanovdb/NanoVDB.h>
+#include <nanovdb/util/GridHandle.h>
+#include <nanovdb/util/HostBuffer.h>
+
+#include <vector>
+
+namespace vl {
+
+using MipIndexGrid = nanovdb::NanoGrid<int32_t>;
+
+// Opacity cap: a solid voxel lets 10⁻³ through per voxel length, so σ stays finite.
+constexpr float kMaxMipOpacity = 0.999f;
+
+struct MipTexel {
+    vec3 radiance = vec3(0.0f);  // α-premultiplied
+    float alpha = 0.0f;
+    float density = 0.0f;        // σ = −ln(1 − min(α, kMaxMipOpacity))
+};
+
+VL_HOSTDEV inline float opticalDepth(float alpha) {
+    return -logf(1.0f - glm::clamp(alpha, 0.0f, kMaxMipOpacity));
+}
+
+// Directions of travel of the texels of levels ≥ 1, in this order.
+enum MipFace { kFacePosX, kFaceNegX, kFacePosY, kFaceNegY, kFacePosZ, kFaceNegZ, kFaceCount };
+
+struct MipLevelView {
+    const MipIndexGrid* index = nullptr;
+    const MipTexel* texels = nullptr;  // texel of voxel i, face f: texels[i·facesPerVoxel + f]
+    int facesPerVoxel = 1;             // 1 at level 0 (isotropic), 6 above
+};
+
+// What a kernel needs: per-level grids and texel arrays (host or device memory, as the
+// owner placed them), the level-0 voxel size and the world box the level-0 voxels cover.
+struct MipView {
+    static constexpr int kMaxLevels = 16;
+    MipLevelView levels[kMaxLevels] = {};
+    int levelCount = 0;
+    float voxelSize = 0.0f;      // h (metres) of level 0
+    vec3 boundsMin = vec3(0.0f);  // world box of the level-0 voxels' extents
+    vec3 boundsMax = vec3(0.0f);
+};
+
+// Index-space position of world point p at `level`, with voxel centres at integers.
+VL_HOSTDEV inline vec3 mipIndexPosition(const vec3& p, float voxelSize, int level) {
+    const float levelVoxelSize = ldexpf(voxelSize, level);
+    const float centreOffset = 0.5f - ldexpf(0.5f, -level);  // (1 − 2^−k)/2 in level-k voxels
+    return p / levelVoxelSize - vec3(centreOffset);
+}
+
+// World centre of voxel `coord` at `level`.
+VL_HOSTDEV inline vec3 mipVoxelCentre(const ivec3& coord, float voxelSize, int level) {
+    const float levelVoxelSize = ldexpf(voxelSize, level);
+    const float centreOffset = 0.5f - ldexpf(0.5f, -level);
+    return (vec3(coord) + vec3(centreOffset)) * levelVoxelSize;
+}
+
+struct MipLevel {
+    double voxelSize = 0.0;          // 2^k·h
+    vec3 centreOffset = vec3(0.0f);  // world position of voxel (0,0,0)'s centre: (2^k − 1)/2·h
+    std::vector<ivec3> coords;       // sorted by (x, y, z)
+    std::vector<vec4> values;        // isotropic (α·radiance, α), parallel to coords
+    std::vector<MipTexel> texels;    // 1 (level 0) or 6 (above) per voxel
+    int facesPerVoxel = 1;
+};
+
+class RadianceMips {
+public:
+    int levelCount() const { return static_cast<int>(levels_.size()); }
+    double voxelSize() const { return voxelSize_; }
+    const MipLevel& level(int k) const { return levels_.at(static_cast<size_t>(k)); }
+    const MipIndexGrid* indexGrid(int k) const;
+    MipView view() const;
+    size_t memoryBytes() const;  // index grids and texel arrays of all levels
+
+private:
+    friend RadianceMips buildRadianceMips(const VoxelScene&, const std::vector<vec3>&);
+    double voxelSize_ = 0.0;
+    vec3 boundsMin_ = vec3(0.0f), boundsMax_ = vec3(0.0f);
+    std::vector<MipLevel> levels_;
+    std::vector<nanovdb::GridHandle<nanovdb::HostBuffer>> grids_;
+};
+
+// Mips of voxels.radiance. Error when radiance, opacity or solid do not match the voxel
+// count (radiance is missing before the lighting stage has run), the voxel size is not
+// positive, or a coordinate is beyond ±2^20; InputError when a radiance is negative, NaN or
+// Inf or an opacity is outside [0, 1] (naming the voxel). An empty scene gives zero levels;
+// cones through it gather nothing.
+RadianceMips buildRadianceMips(const VoxelScene& voxels);
+// The same topology with another radiance channel (parallel to voxels.coords).
+RadianceMips buildRadianceMips(const VoxelScene& voxels, const std::vector<vec3>& radiance);
+
+// Grids for grids.vdb: per level k, `radiance_mip<k>` (Vec3, the isotropic α-premultiplied
+// radiance) and `opacity_mip<k>` (float α), voxel size 2^k·h. ExtraGrid has no
+// translation: level k's voxel I is centred at I·2^k·h + MipLevel::centreOffset.
+std::vector<ExtraGrid> mipGridsForFile(const RadianceMips& mips);
+
+}  // namespace vl
