@@ -15,28 +15,34 @@ namespace vl {
 
 // Per-ray data for the watertight test: computed once per ray, reused for every triangle.
 struct WatertightRay {
-    vec3 origin;
-    int kx, ky, kz;  // axis permutation: kz is the dominant direction axis
+    int kx, ky, kz;    // axis permutation: kz is the dominant direction axis
     float sx, sy, sz;  // shear taking the direction to (0, 0, 1)
+    float ox, oy, oz;  // origin, permuted
 };
+
+// Component i of v. glm's operator[] is a switch, which the triangle test would run with
+// run-time axes for every triangle.
+VL_HOSTDEV inline float component(const vec3& v, int i) { return (&v.x)[i]; }
 
 VL_HOSTDEV inline WatertightRay makeWatertightRay(const vec3& origin, const vec3& direction) {
     WatertightRay r;
-    r.origin = origin;
     const vec3 a = glm::abs(direction);
     r.kz = a.x >= a.y ? (a.x >= a.z ? 0 : 2) : (a.y >= a.z ? 1 : 2);
     r.kx = r.kz == 2 ? 0 : r.kz + 1;
     r.ky = r.kx == 2 ? 0 : r.kx + 1;
     // Swapping kx and ky for a negative dominant component keeps the winding, so the sign
     // of the edge functions means the same thing for every ray.
-    if (direction[r.kz] < 0.0f) {
+    if (component(direction, r.kz) < 0.0f) {
         const int tmp = r.kx;
         r.kx = r.ky;
         r.ky = tmp;
     }
-    r.sx = direction[r.kx] / direction[r.kz];
-    r.sy = direction[r.ky] / direction[r.kz];
-    r.sz = 1.0f / direction[r.kz];
+    r.sx = component(direction, r.kx) / component(direction, r.kz);
+    r.sy = component(direction, r.ky) / component(direction, r.kz);
+    r.sz = 1.0f / component(direction, r.kz);
+    r.ox = component(origin, r.kx);
+    r.oy = component(origin, r.ky);
+    r.oz = component(origin, r.kz);
     return r;
 }
 
@@ -49,45 +55,49 @@ VL_HOSTDEV inline bool edgeTieIsPositive(float ax, float ay, float bx, float by)
 }
 
 struct TriangleHit {
-    float t;
-    float b1, b2;  // point = (1-b1-b2)·v0 + b1·v1 + b2·v2
+    float t = 0.0f;
+    float b1 = 0.0f, b2 = 0.0f;  // point = (1-b1-b2)·v0 + b1·v1 + b2·v2
 };
 
 // Hit iff t ∈ (tMin, tMax). Both faces are hit; a degenerate triangle is never hit.
 VL_HOSTDEV inline bool intersectTriangle(const WatertightRay& ray, const vec3& v0, const vec3& v1,
                                          const vec3& v2, float tMin, float tMax, TriangleHit& hit) {
-    const vec3 a = v0 - ray.origin;
-    const vec3 b = v1 - ray.origin;
-    const vec3 c = v2 - ray.origin;
-    const float ax = a[ray.kx] - ray.sx * a[ray.kz];
-    const float ay = a[ray.ky] - ray.sy * a[ray.kz];
-    const float bx = b[ray.kx] - ray.sx * b[ray.kz];
-    const float by = b[ray.ky] - ray.sy * b[ray.kz];
-    const float cx = c[ray.kx] - ray.sx * c[ray.kz];
-    const float cy = c[ray.ky] - ray.sy * c[ray.kz];
+    // Translate to the origin, then shear: the ray becomes the +z axis through (0, 0).
+    const float az = component(v0, ray.kz) - ray.oz;
+    const float bz = component(v1, ray.kz) - ray.oz;
+    const float cz = component(v2, ray.kz) - ray.oz;
+    const float ax = (component(v0, ray.kx) - ray.ox) - ray.sx * az;
+    const float ay = (component(v0, ray.ky) - ray.oy) - ray.sy * az;
+    const float bx = (component(v1, ray.kx) - ray.ox) - ray.sx * bz;
+    const float by = (component(v1, ray.ky) - ray.oy) - ray.sy * bz;
+    const float cx = (component(v2, ray.kx) - ray.ox) - ray.sx * cz;
+    const float cy = (component(v2, ray.ky) - ray.oy) - ray.sy * cz;
 
     // u weights v0 (edge v2→v1), v weights v1 (edge v0→v2), w weights v2 (edge v1→v0).
     float u = cx * by - cy * bx;
     float v = ax * cy - ay * cx;
     float w = bx * ay - by * ax;
-    // float×float is exact in double, so an edge that rounds to 0 gets its exact sign. Each
-    // edge's value depends only on that edge's two vertices, so the neighbouring triangle
-    // computes exactly the negated value for the shared edge: no gap, no double count.
-    if (u == 0.0f) u = static_cast<float>(static_cast<double>(cx) * by - static_cast<double>(cy) * bx);
-    if (v == 0.0f) v = static_cast<float>(static_cast<double>(ax) * cy - static_cast<double>(ay) * cx);
-    if (w == 0.0f) w = static_cast<float>(static_cast<double>(bx) * ay - static_cast<double>(by) * ax);
-    const bool uPos = u != 0.0f ? u > 0.0f : edgeTieIsPositive(cx, cy, bx, by);
-    const bool vPos = v != 0.0f ? v > 0.0f : edgeTieIsPositive(ax, ay, cx, cy);
-    const bool wPos = w != 0.0f ? w > 0.0f : edgeTieIsPositive(bx, by, ax, ay);
-    if (uPos != vPos || vPos != wPos) return false;
+    // Strictly mixed signs: a miss whatever the exact zeros below would decide (the common
+    // case, so it comes first).
+    if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return false;
+    if (u == 0.0f || v == 0.0f || w == 0.0f) {
+        // float×float is exact in double, so an edge that rounds to 0 gets its exact sign.
+        // Each edge's value depends only on that edge's two vertices, so the neighbouring
+        // triangle computes exactly the negated value for the shared edge: no gap, no
+        // double count. An edge still exactly 0 goes to the tie rule.
+        if (u == 0.0f) u = static_cast<float>(static_cast<double>(cx) * by - static_cast<double>(cy) * bx);
+        if (v == 0.0f) v = static_cast<float>(static_cast<double>(ax) * cy - static_cast<double>(ay) * cx);
+        if (w == 0.0f) w = static_cast<float>(static_cast<double>(bx) * ay - static_cast<double>(by) * ax);
+        const bool uPos = u != 0.0f ? u > 0.0f : edgeTieIsPositive(cx, cy, bx, by);
+        const bool vPos = v != 0.0f ? v > 0.0f : edgeTieIsPositive(ax, ay, cx, cy);
+        const bool wPos = w != 0.0f ? w > 0.0f : edgeTieIsPositive(bx, by, ax, ay);
+        if (uPos != vPos || vPos != wPos) return false;
+    }
 
     const float det = u + v + w;
     if (det == 0.0f) return false;
-    const float az = ray.sz * a[ray.kz];
-    const float bz = ray.sz * b[ray.kz];
-    const float cz = ray.sz * c[ray.kz];
     const float invDet = 1.0f / det;
-    const float t = (u * az + v * bz + w * cz) * invDet;
+    const float t = ray.sz * (u * az + v * bz + w * cz) * invDet;
     // Written so a NaN t is rejected.
     if (!(t > tMin && t < tMax)) return false;
     hit.t = t;
