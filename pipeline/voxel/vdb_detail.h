@@ -3,7 +3,9 @@
 
 #include <openvdb/openvdb.h>
 
+#include <functional>
 #include <string>
+#include <vector>
 
 namespace vl::vdb_detail {
 
@@ -13,8 +15,15 @@ struct LoadedFile {
     openvdb::MetaMap::Ptr metadata;
 };
 
-// InputError naming the file when it is missing, not a VDB file, or unreadable.
-LoadedFile readAllGrids(const std::string& path);
+// The grids of the file whose names are in `names` (absent ones are skipped: the caller
+// decides which are required), and the file-level metadata. InputError naming the file
+// when it is missing, not a VDB file, or unreadable.
+LoadedFile readGridsNamed(const std::string& path, const std::vector<std::string>& names);
+
+// Calls visit(grid) for every grid of the file, one at a time (only one grid is in memory at
+// once); returns the file-level metadata. Errors as readAllGrids.
+openvdb::MetaMap::Ptr forEachGrid(const std::string& path,
+                                  const std::function<void(const openvdb::GridBase&)>& visit);
 
 // One grid by name; InputError naming the file and the grid (listing the grids the file
 // has) when it is absent.

@@ -61,19 +61,40 @@ auto guardedRead(const std::string& path, F&& read) {
 
 }  // namespace
 
-LoadedFile readAllGrids(const std::string& path) {
+LoadedFile readGridsNamed(const std::string& path, const std::vector<std::string>& names) {
     initializeOpenVdb();
     requireReadableFile(path);
     return guardedRead(path, [&] {
         openvdb::io::File file(path);
         file.open(/*delayLoad=*/false);
         LoadedFile loaded;
-        loaded.grids = file.getGrids();
         loaded.metadata = file.getMetadata();
         if (!loaded.metadata) loaded.metadata = std::make_shared<openvdb::MetaMap>();
-        if (!loaded.grids) loaded.grids = std::make_shared<openvdb::GridPtrVec>();
+        loaded.grids = std::make_shared<openvdb::GridPtrVec>();
+        for (const std::string& name : names)
+            if (file.hasGrid(name)) loaded.grids->push_back(file.readGrid(name));
         file.close();
         return loaded;
+    });
+}
+
+openvdb::MetaMap::Ptr forEachGrid(const std::string& path,
+                                  const std::function<void(const openvdb::GridBase&)>& visit) {
+    initializeOpenVdb();
+    requireReadableFile(path);
+    return guardedRead(path, [&] {
+        openvdb::io::File file(path);
+        file.open(/*delayLoad=*/false);
+        openvdb::MetaMap::Ptr metadata = file.getMetadata();
+        if (!metadata) metadata = std::make_shared<openvdb::MetaMap>();
+        std::vector<std::string> names;
+        for (auto it = file.beginName(); it != file.endName(); ++it) names.push_back(*it);
+        for (const std::string& name : names) {
+            const openvdb::GridBase::ConstPtr grid = file.readGrid(name);
+            if (grid) visit(*grid);
+        }
+        file.close();
+        return metadata;
     });
 }
 
@@ -388,7 +409,10 @@ void writeVoxelFile(const VoxelScene& voxels, const std::string& path, const std
 }
 
 VoxelScene readVoxelFile(const std::string& path) {
-    const GridSet set(path, vdb_detail::readAllGrids(path));
+    namespace g = grid_names;
+    const GridSet set(path, vdb_detail::readGridsNamed(path, {g::albedo, g::normal, g::emission, g::opacity,
+                                                              g::occlusion, g::solid, g::radiance,
+                                                              g::axisWeightsPos, g::axisWeightsNeg}));
     using openvdb::BoolGrid;
     using openvdb::FloatGrid;
     using openvdb::Vec3SGrid;

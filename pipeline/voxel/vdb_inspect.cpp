@@ -273,12 +273,11 @@ Image sliceOf(const GridT& grid, const openvdb::CoordBBox& box, SliceAxis axis, 
 vec3 inactiveSliceColour(int column, int row) { return vec3(((column + row) & 1) ? 0.03f : 0.12f); }
 
 VdbFileInfo inspectVoxelFile(const std::string& path, int histogramBins) {
-    const vdb_detail::LoadedFile loaded = vdb_detail::readAllGrids(path);
     VdbFileInfo info;
     info.path = path;
-    info.metadata = metadataText(*loaded.metadata, false);
-    for (const auto& grid : *loaded.grids)
-        if (grid) info.grids.push_back(describeGrid(*grid, histogramBins));
+    const openvdb::MetaMap::Ptr metadata = vdb_detail::forEachGrid(
+        path, [&](const openvdb::GridBase& grid) { info.grids.push_back(describeGrid(grid, histogramBins)); });
+    info.metadata = metadataText(*metadata, false);
     return info;
 }
 
