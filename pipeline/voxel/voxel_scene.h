@@ -23,7 +23,7 @@ struct VoxelSettings {
     double voxelSize = 0.0;   // metres; 0 = derive from resolution
     int resolution = 128;     // voxels along the scene's longest axis when voxelSize is 0
     bool fillInterior = false;  // also mark voxels inside closed meshes solid
-    int texelSamples = 4;     // texture samples per axis over each triangle piece (albedo, emission)
+    int texelSamples = 4;     // texture samples per axis per voxel face area, over each triangle piece (albedo, emission)
 };
 
 struct VoxelScene {

@@ -94,9 +94,11 @@ struct PieceShading {
     dvec3 emission{0.0};
 };
 
-// Samples the material over a clipped piece: texelSamples² points spread over the fan
-// triangles of the piece in proportion to their area, each at the centroid of one of the
-// k² congruent sub-triangles of a k-fold subdivision (an equal-area quadrature).
+// Samples the material over a clipped piece (voxel units, so a voxel face has area 1):
+// texelSamples² points per unit area spread over the fan triangles of the piece, at least
+// one per fan triangle, each at the centroid of one of the k² congruent sub-triangles of a
+// k-fold subdivision (an equal-area quadrature, exact for linear colours). A sliver that
+// clips a voxel's corner needs no more samples than its size.
 PieceShading shadePiece(const Scene& scene, const MeshShading& shading, uint32_t triangle,
                         const ClipPolygon& piece, double pieceArea, const dvec3& n, int samplesPerAxis,
                         bool withEmission) {
@@ -115,7 +117,7 @@ PieceShading shadePiece(const Scene& scene, const MeshShading& shading, uint32_t
         const double fanArea =
             0.5 * glm::dot(n, glm::cross(piece.position[t] - p0, piece.position[t + 1] - p0));
         if (!(fanArea > 0.0)) continue;
-        const int k = std::max(1, static_cast<int>(std::lround(samplesPerAxis * std::sqrt(fanArea / pieceArea))));
+        const int k = std::max(1, static_cast<int>(std::lround(samplesPerAxis * std::sqrt(fanArea))));
         const double weight = fanArea / (double(k) * k);
         const dvec2 b0 = piece.barycentric[0];
         const dvec2 bu = piece.barycentric[t] - b0;

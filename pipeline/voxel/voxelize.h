@@ -11,8 +11,9 @@
 //   opaque, the fraction of texture samples at or above alphaCutoff for MASK, the mean
 //   alpha for BLEND, times (1 − transmission). Every channel is a mean over the pieces
 //   weighted by that visible area.
-// - albedo: base colour (factor × texture × COLOR_0) sampled on texelSamples² points spread
-//   over each piece by area, not at its vertices; emission likewise (emissionAt). The
+// - albedo: base colour (factor × texture × COLOR_0) sampled on texelSamples² points per
+//   voxel face area (h²) spread over each piece by area (at least one per fan triangle of
+//   the piece), not at its vertices; emission likewise (emissionAt). The
 //   points are the centroids of a regular subdivision (exact for colours linear over the
 //   piece); texture detail finer than their spacing is point-sampled and can alias, as
 //   Texture has no mip levels to prefilter with. Materials without textures or varying
