@@ -318,14 +318,24 @@ VL_HOSTDEV inline float occlusionAlongRay(const LightingView& view, IndexAccesso
         if (!(tExit < tEnd)) break;  // this voxel holds the end point
         const nanovdb::Coord ijk(c.x, c.y, c.z);
         ++steps;
+        int32_t index;
         if (Hierarchical) {
-            const uint32_t dim = accessor.getDim(ijk, 0);
-            if (dim > 1 && !accessor.isActive(ijk)) {
-                if (!(walk.leapBox(c, static_cast<int>(dim)) < tEnd)) break;
-                continue;
+            // One lookup per step: inside a leaf read it there; outside every leaf the node
+            // or tile around c is empty (the index grid has no active tiles): leap it.
+            const auto* leaf = accessor.probeLeaf(ijk);
+            if (leaf) {
+                index = leaf->getValue(ijk);
+            } else {
+                const uint32_t dim = accessor.getDim(ijk, 0);
+                if (dim > 1 && !accessor.isActive(ijk)) {
+                    if (!(walk.leapBox(c, static_cast<int>(dim)) < tEnd)) break;
+                    continue;
+                }
+                index = accessor.getValue(ijk);
             }
+        } else {
+            index = accessor.getValue(ijk);
         }
-        const int32_t index = accessor.getValue(ijk);
         if (index >= 0) {
             const vec3 centre(c);
             const vec3 fromReceiver = centre - receiver;
