@@ -200,7 +200,9 @@ int main(int argc, char** argv) {
                     build2.wall);
         std::printf("voxlight BVH: %zu nodes, %.1f MiB (%.1f bytes/triangle)\n", bvh.nodes.size(),
                     double(bvh.memoryBytes()) / (1 << 20), double(bvh.memoryBytes()) / double(triangleCount));
-        const BvhView view = bvh.view();
+        BvhView view = bvh.view();
+        // VL_BVH_BINARY=1 traverses the binary nodes instead of the 4-wide ones.
+        if (std::getenv("VL_BVH_BINARY") != nullptr) view.wideNodes = nullptr;
 
         // Viewpoint, camera, and the points shadow rays go to.
         const std::vector<Viewpoint> inside = insidePoints(bvh, tris, 16);

@@ -35,12 +35,25 @@ struct BvhNode {
     uint32_t count;         // leaf: triangle count (> 0); inner: 0 (left child is this + 1)
 };
 
+// [added by bvh] The same tree collapsed to four children per node, boxes stored by axis
+// so one slab test covers all four (SIMD on the CPU, a short loop on the GPU): what
+// traversal uses when present. Lanes past the node's children have count kBvhEmptyLane.
+struct alignas(16) BvhWideNode {
+    float lowerX[4], upperX[4], lowerY[4], upperY[4], lowerZ[4], upperZ[4];
+    uint32_t child[4];  // inner lane: wide node index; leaf lane: first slot
+    uint32_t count[4];  // inner lane: 0; leaf lane: triangle count; unused lane: kBvhEmptyLane
+};
+constexpr uint32_t kBvhEmptyLane = 0xFFFFFFFFu;
+
 // Plain pointers into a built Bvh: what kernels (host or device) traverse.
 struct BvhView {
     const BvhNode* nodes = nullptr;
     const vec3* vertices = nullptr;    // reordered, 3 per leaf slot
     const uint32_t* triangleIds = nullptr;  // leaf slot → global triangle id
     uint32_t nodeCount = 0;
+    // [added by bvh] Optional: null → traversal walks the binary `nodes` instead (same hits).
+    const BvhWideNode* wideNodes = nullptr;
+    uint32_t wideNodeCount = 0;
 };
 
 // The deepest tree Bvh::build makes (it falls back to object-median splits to stay within
@@ -65,6 +78,7 @@ public:
     std::vector<BvhNode> nodes;
     std::vector<vec3> vertices;
     std::vector<uint32_t> triangleIds;
+    std::vector<BvhWideNode> wideNodes;  // [added by bvh] nodes collapsed 4-wide
 };
 
 // Traversal (closest hit, any hit) is inline VL_HOSTDEV in trace/bvh_traverse.h, so CUDA

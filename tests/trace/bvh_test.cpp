@@ -69,7 +69,10 @@ TEST_CASE("BVH closest hit equals brute force on random triangle soups", "[trace
         ++seed;
         const SceneTriangles tris = randomSoup(soup.count, seed, soup.size);
         const Bvh bvh = Bvh::build(tris);
-        const BvhView view = bvh.view();
+        REQUIRE(bvh.view().wideNodes != nullptr);
+        for (const bool wide : {true, false}) {
+        BvhView view = bvh.view();
+        if (!wide) view.wideNodes = nullptr;  // the binary traversal
         Pcg32 rng(seed, 7);
         int hits = 0;
         for (int i = 0; i < 4000; ++i) {
@@ -92,6 +95,7 @@ TEST_CASE("BVH closest hit equals brute force on random triangle soups", "[trace
         // Both outcomes must be exercised for the comparison to mean something.
         REQUIRE(hits > 300);
         REQUIRE(hits < 3900);
+        }
     }
 }
 
@@ -152,6 +156,35 @@ TreeStats checkTree(const Bvh& bvh, const SceneTriangles& tris) {
     checkSubtree(bvh, 0, 0, slotSeen, stats);
     for (int seen : slotSeen) REQUIRE(seen == 1);
     REQUIRE(bvh.nodes.size() == 2 * size_t(stats.leaves) - 1);  // binary: every inner node has 2 children
+
+    // The 4-wide collapse covers the same slots once each, inside its lanes' boxes, and
+    // every wide node but the root is referenced exactly once.
+    std::vector<int> wideSlotSeen(count, 0), wideNodeSeen(bvh.wideNodes.size(), 0);
+    for (const BvhWideNode& node : bvh.wideNodes) {
+        int lanes = 0;
+        for (int i = 0; i < 4; ++i) {
+            if (node.count[i] == kBvhEmptyLane) continue;
+            ++lanes;
+            const Aabb box{vec3(node.lowerX[i], node.lowerY[i], node.lowerZ[i]),
+                           vec3(node.upperX[i], node.upperY[i], node.upperZ[i])};
+            if (node.count[i] == 0) {
+                REQUIRE(node.child[i] < bvh.wideNodes.size());
+                ++wideNodeSeen[node.child[i]];
+                continue;
+            }
+            for (uint32_t slot = node.child[i]; slot < node.child[i] + node.count[i]; ++slot) {
+                ++wideSlotSeen[slot];
+                for (int k = 0; k < 3; ++k) {
+                    REQUIRE(glm::all(glm::lessThanEqual(box.lower, bvh.vertices[3 * size_t(slot) + k])));
+                    REQUIRE(glm::all(glm::lessThanEqual(bvh.vertices[3 * size_t(slot) + k], box.upper)));
+                }
+            }
+        }
+        REQUIRE(lanes >= (count > 1 ? 2 : 1));
+    }
+    for (int seen : wideSlotSeen) REQUIRE(seen == 1);
+    REQUIRE(wideNodeSeen[0] == 0);
+    for (size_t i = 1; i < wideNodeSeen.size(); ++i) REQUIRE(wideNodeSeen[i] == 1);
     return stats;
 }
 

@@ -118,6 +118,13 @@ IndexedMesh gridCube() {
     return m;
 }
 
+// The same tree walked through its binary nodes instead of the 4-wide ones.
+BvhView binaryView(const Bvh& bvh) {
+    BvhView view = bvh.view();
+    view.wideNodes = nullptr;
+    return view;
+}
+
 int bruteForceHitCount(const SceneTriangles& tris, const Ray& ray) {
     const WatertightRay wr = makeWatertightRay(ray.origin, ray.direction);
     int count = 0;
@@ -181,9 +188,11 @@ TEST_CASE("Rays through shared vertices and edges of an icosphere hit exactly on
             ray.origin = origin;
             ray.direction = target - origin;  // not normalised: t = 1 at the target
             REQUIRE(bruteForceHitCount(tris, ray) == 1);
-            Hit hit;
-            REQUIRE(intersectClosest(bvh.view(), ray, hit));
-            REQUIRE(hit.t == Approx(1.0f).margin(1e-5));
+            for (const BvhView& view : {bvh.view(), binaryView(bvh)}) {
+                Hit hit;
+                REQUIRE(intersectClosest(view, ray, hit));
+                REQUIRE(hit.t == Approx(1.0f).margin(1e-5));
+            }
             ++checked;
         }
     REQUIRE(checked == 3 * (642 + 2 * 1920));
@@ -218,9 +227,12 @@ TEST_CASE("Rays exactly through vertices and edges of an integer cube hit exactl
                         INFO("origin " << ray.origin.x << " " << ray.origin.y << " " << ray.origin.z << " dir "
                                        << ray.direction.x << " " << ray.direction.y << " " << ray.direction.z);
                         REQUIRE(bruteForceHitCount(tris, ray) == 1);
-                        Hit hit;
-                        REQUIRE(intersectClosest(bvh.view(), ray, hit));
-                        REQUIRE(hit.t == Approx(flip ? 3.0f : 1.0f).epsilon(1e-6));
+                        for (const BvhView& view : {bvh.view(), binaryView(bvh)}) {
+                            Hit hit;
+                            REQUIRE(intersectClosest(view, ray, hit));
+                            REQUIRE(hit.t == Approx(flip ? 3.0f : 1.0f).epsilon(1e-6));
+                            REQUIRE(intersectAny(view, ray));
+                        }
                         ++checked;
                     }
                 }
