@@ -85,7 +85,9 @@ void printText(const VdbFileInfo& info) {
                             triple(s.componentMax).c_str());
             const uint64_t peak = *std::max_element(s.histogram.begin(), s.histogram.end());
             const double width = (s.max - s.min) / double(s.histogram.size());
-            for (size_t b = 0; b < s.histogram.size(); ++b) {
+            // A constant grid has one value: one line says it.
+            const size_t bins = s.max > s.min ? s.histogram.size() : 1;
+            for (size_t b = 0; b < bins; ++b) {
                 constexpr int kBarWidth = 40;
                 const int bar = peak ? static_cast<int>((s.histogram[b] * kBarWidth + peak - 1) / peak) : 0;
                 std::printf("  %12s |%-*s| %llu\n", number(s.min + width * double(b)).c_str(), kBarWidth,
@@ -98,6 +100,14 @@ void printText(const VdbFileInfo& info) {
         if (s.nonFinite) std::printf("  non-finite   %llu voxels (NaN or Inf)\n", static_cast<unsigned long long>(s.nonFinite));
         for (const auto& [key, value] : g.metadata) std::printf("  %-12s %s\n", key.c_str(), value.c_str());
     }
+    uint64_t used = 0, dense = 0;
+    for (const GridInfo& g : info.grids) {
+        used += g.memoryBytes;
+        dense += g.denseBytes;
+    }
+    if (!info.grids.empty())
+        std::printf("\ntotal memory %s, dense bboxes %s\n", humanBytes(double(used)).c_str(),
+                    humanBytes(double(dense)).c_str());
 }
 
 nlohmann::ordered_json toJson(const VdbFileInfo& info) {
@@ -181,6 +191,7 @@ void runInspect(const InspectOptions& options) {
         else printText(info);
         return;
     }
+    if (options.json) throw SettingsError("inspect: --json prints the summary; it does not go with --slice");
     if (options.grid.empty()) throw SettingsError("inspect: --slice needs --grid NAME");
     if (options.output.empty()) throw SettingsError("inspect: --slice needs -o FILE (.png or .exr)");
     const auto [axis, index] = parseSlice(options.slice);
