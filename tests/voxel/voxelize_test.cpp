@@ -4,6 +4,8 @@
 // Scenes are built in code.
 #include "core/error.h"
 #include "core/rng.h"
+#include "scene/gltf_loader.h"
+#include "support/paths.h"
 #include "voxel/triangle_box.h"
 #include "voxel/voxelize.h"
 
@@ -634,4 +636,35 @@ TEST_CASE("fillInterior makes a closed cube solid through its depth", "[voxel]")
     VoxelizeStats openStats;
     voxelize(sceneOf({open}, {colouredMaterial(grey)}), settings, nullptr, &openStats);
     CHECK(openStats.interiorVoxels == 0);
+}
+
+TEST_CASE("The project Cornell box voxelizes with its wall colours and light", "[voxel]") {
+    const Scene scene = loadGltf(test::sourceDir() + "/scenes/cornell_box.gltf");
+    VoxelSettings settings;
+    settings.resolution = 64;
+    const VoxelScene voxels = voxelize(scene, settings);
+    REQUIRE(scene.hasEmitters());
+    REQUIRE(voxels.emission.size() == voxels.size());
+    REQUIRE(allFinite(voxels));
+
+    vec3 lowest(kInfinity), highest(-kInfinity), brightest(0.0f), lightEmission(0.0f);
+    for (const Material& m : scene.materials) {
+        lowest = glm::min(lowest, vec3(m.baseColorFactor));
+        highest = glm::max(highest, vec3(m.baseColorFactor));
+        if (m.emissive()) lightEmission = m.emission();
+    }
+    std::set<std::tuple<float, float, float>> pure;  // voxels holding one material only
+    for (size_t v = 0; v < voxels.size(); ++v) {
+        // Every voxel's albedo is a convex combination of the materials' colours.
+        REQUIRE(glm::all(glm::greaterThanEqual(voxels.albedo[v], lowest - 1e-6f)));
+        REQUIRE(glm::all(glm::lessThanEqual(voxels.albedo[v], highest + 1e-6f)));
+        REQUIRE(glm::all(glm::lessThanEqual(voxels.emission[v], lightEmission * (1.0f + 1e-6f))));
+        if (luminance(voxels.emission[v]) > luminance(brightest)) brightest = voxels.emission[v];
+        pure.insert({voxels.albedo[v].x, voxels.albedo[v].y, voxels.albedo[v].z});
+    }
+    // Voxels inside the light quad (and nothing else) carry its emission exactly, and the
+    // red and green walls give their colours exactly somewhere.
+    CHECK(brightest == lightEmission);
+    CHECK(pure.count({0.63f, 0.065f, 0.05f}) == 1);
+    CHECK(pure.count({0.14f, 0.45f, 0.091f}) == 1);
 }
