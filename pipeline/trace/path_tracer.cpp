@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "trace/bvh.h"
+#include "trace/sample_patterns.h"
 #include "trace/trace_scene.h"
 
 #include <tbb/blocked_range.h>
@@ -71,6 +72,8 @@ TraceResult makeResult(int width, int height) {
 // Salts keep camera and receiver streams apart even for the same element index.
 constexpr uint64_t kCameraSalt = 0x63616d657261ull;
 constexpr uint64_t kReceiverSalt = 0x7265636569766572ull;
+// The "sample number" that seeds a pixel's pattern rotation, apart from every real sample.
+constexpr uint64_t kPatternSample = ~0ull;
 
 }  // namespace
 
@@ -93,11 +96,15 @@ TraceResult renderCamera(const TraceScene& scene, const Bvh& bvh, const CameraMo
             uint64_t rowDropped = 0;
             for (int x = 0; x < camera.width; ++x) {
                 const uint64_t index = static_cast<uint64_t>(y) * camera.width + x;
+                // The pixel's rotation of its stratified pixel and lens patterns.
+                Pcg32 patternRng = Pcg32::forItem(index, kPatternSample, salt);
+                const vec2 pixelShift(patternRng.next1D(), patternRng.next1D());
+                const vec2 lensShift(patternRng.next1D(), patternRng.next1D());
                 Accumulator acc;
                 for (int j = 0; j < spp; ++j) {
                     Pcg32 rng = Pcg32::forItem(index, static_cast<uint64_t>(j), salt);
-                    const vec2 uPixel(rng.next1D(), rng.next1D());
-                    const vec2 uLens(rng.next1D(), rng.next1D());
+                    const vec2 uPixel = rotatedHammersley(static_cast<uint32_t>(j), static_cast<uint32_t>(spp), pixelShift);
+                    const vec2 uLens = rotatedHalton35(static_cast<uint32_t>(j), lensShift);
                     const Ray ray = thinLensRay(camera, pixelSamplePoint(x, y, uPixel, settings.filter), uLens);
                     acc.add(traceCameraPath(sv, bv, ray, rng, settings.path));
                 }

@@ -1,0 +1,15 @@
+// Fills lightmap padding from the covered texels around it, so bilinear filtering and mip
+// maps at chart edges do not pull in black. Pass by pass, every unfilled texel with at least
+// one filled 8-neighbour takes the mean of those neighbours and counts as filled for the
+// next pass. Covered texels never change. Deterministic (each pass reads the previous one).
+#pragma once
+
+#include "core/image.h"
+
+namespace vl {
+
+// mask: 1 channel, > 0.5 = covered. passes < 0: until no padding texel next to a filled one
+// is left. Returns the number of texels filled.
+size_t dilatePadding(Image& image, const Image& mask, int passes = -1);
+
+}  // namespace vl

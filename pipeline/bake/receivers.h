@@ -1,0 +1,67 @@
+// Receivers: the surface points a bake (cone tracing) or the reference path tracer lights.
+//
+// Lightmaps: every mesh with TEXCOORD_1 is rasterised in texel space. glTF's v runs down
+// from the top of the image, so texel (x, y) (row y from the top) spans u ∈ [x, x+1)/W,
+// v ∈ [y, y+1)/H. Each texel is probed on an n × n grid of sub-texel points; a point inside
+// a triangle (top-left rule on shared edges, so no point counts twice on a seam) is
+// covered. A texel keeps either every covered point or, by default, one sample per triangle
+// at the centroid of that triangle's covered points, weighted by their share: a texel a
+// chart edge crosses averages its triangles. Texels with no covered point are padding
+// (mask 0), for dilation. All meshes with TEXCOORD_1 share one atlas (one image), as a
+// Blender export does; emitter meshes are not baked, and a mesh without TEXCOORD_1 is
+// skipped with a warning naming it.
+//
+// Camera: per pixel, an n × n grid of pinhole primary rays (a G-buffer): the surface each
+// ray hits, its normal turned toward the camera, weighted 1/n² (a pixel that partly sees
+// the background sums to less than 1), and the emission seen directly.
+#pragma once
+
+#include "core/diagnostics.h"
+#include "core/image.h"
+#include "scene/scene.h"
+#include "trace/camera.h"
+#include "trace/surface_samples.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace vl {
+
+class Bvh;
+class TraceScene;
+
+struct LightmapSettings {
+    int width = 256;
+    int height = 256;
+    int subsamplesPerAxis = 4;     // n: sub-texel probe grid n × n (1 = texel centres only), 1..8
+    bool samplePerTriangle = true; // one sample per (texel, triangle) at its covered points' centroid
+    bool atlasPerMesh = false;     // each mesh its own image instead of one shared atlas
+
+    void validate() const;  // SettingsError naming the setting
+};
+
+struct LightmapAtlas {
+    std::string name;              // "lightmap" for the shared atlas; the mesh name per mesh
+    std::vector<uint32_t> meshes;  // indices into Scene::meshes baked into this image
+    SurfaceSampleSet receivers;    // per texel; weights sum to 1 on covered texels
+    Image mask;                    // 1 channel: 1 covered, 0 padding
+    size_t coveredTexels = 0;
+    size_t overlappingProbes = 0;  // sub-texel points covered by more than one triangle
+};
+
+// Global triangle ids follow gatherTriangles (mesh-major, every triangle).
+std::vector<LightmapAtlas> buildLightmapReceivers(const Scene& scene, const LightmapSettings& settings,
+                                                  Diagnostics& diagnostics);
+
+struct CameraReceivers {
+    SurfaceSampleSet receivers;  // per pixel; weights 1/n² per hit
+    Image emission;              // RGB: emitted radiance seen directly, pixel mean
+    Image albedo;                // RGB: base colour, pixel mean (background 0)
+    Image mask;                  // 1 channel: fraction of the pixel's rays that hit a surface
+};
+
+CameraReceivers buildCameraReceivers(const TraceScene& scene, const Bvh& bvh, const CameraModel& camera,
+                                     int subsamplesPerAxis = 1);
+
+}  // namespace vl
