@@ -192,7 +192,9 @@ bool sameBytes(const Bvh& a, const Bvh& b) {
     return a.nodes.size() == b.nodes.size() && a.vertices.size() == b.vertices.size() &&
            a.triangleIds == b.triangleIds &&
            std::memcmp(a.nodes.data(), b.nodes.data(), a.nodes.size() * sizeof(BvhNode)) == 0 &&
-           std::memcmp(a.vertices.data(), b.vertices.data(), a.vertices.size() * sizeof(vec3)) == 0;
+           std::memcmp(a.vertices.data(), b.vertices.data(), a.vertices.size() * sizeof(vec3)) == 0 &&
+           a.wideNodes.size() == b.wideNodes.size() &&
+           std::memcmp(a.wideNodes.data(), b.wideNodes.data(), a.wideNodes.size() * sizeof(BvhWideNode)) == 0;
 }
 
 }  // namespace
