@@ -19,6 +19,7 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <sstream>
 
 namespace vl {
 namespace {
@@ -50,6 +51,12 @@ bool allFinite(const glm::dmat4& m) {
         for (int r = 0; r < 4; ++r)
             if (!std::isfinite(m[c][r])) return false;
     return true;
+}
+
+std::string shortNumber(double value) {
+    std::ostringstream out;
+    out << value;
+    return out.str();
 }
 
 std::string quoted(const std::string& name) { return name.empty() ? std::string() : " '" + name + "'"; }
@@ -213,8 +220,8 @@ private:
     float factor(double value, double lo, double hi, const std::string& what) {
         if (!std::isfinite(value)) fail(what + " is not finite");
         if (value < lo || value > hi) {
-            warn(what + " = " + std::to_string(value) + " is outside [" + std::to_string(lo) + ", " +
-                 std::to_string(hi) + "]; clamped");
+            warn(what + " = " + shortNumber(value) + " is " + (value < lo ? "below " + shortNumber(lo) : "above " + shortNumber(hi)) +
+                 "; clamped");
             value = std::clamp(value, lo, hi);
         }
         return static_cast<float>(value);

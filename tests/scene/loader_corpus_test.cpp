@@ -281,3 +281,28 @@ TEST_CASE("The nvpro Cornell box loads with warnings for its odd bits", "[scene]
     CHECK(scene.lights.empty());
     CHECK_THROWS_AS(loadQuiet(path, /*strict=*/true), InputError);
 }
+
+TEST_CASE("Mirrored sample models keep faces and their file normals on the same side", "[scene]") {
+    VL_SKIP_WITHOUT_SHARED();
+    // Models with vertex normals and negative-determinant nodes: after the winding flip every
+    // triangle's CCW normal must agree with the file's normals, transformed by the inverse
+    // transpose. Without the flip the mirrored instances would all disagree.
+    std::vector<std::string> files{sharedDir() +
+                                   "/scenes/khronos-sample-assets/Models/NegativeScaleTest/glTF-Binary/NegativeScaleTest.glb"};
+    for (int i = 7; i <= 12; ++i)
+        files.push_back(sharedDir() + "/scenes/gltf-asset-generator-2018/Output/Node_NegativeScale/Node_NegativeScale_" +
+                        (i < 10 ? "0" : "") + std::to_string(i) + ".gltf");
+    for (const std::string& path : files) {
+        INFO(path);
+        const Scene scene = loadQuiet(path);
+        size_t agree = 0, disagree = 0;
+        for (const Mesh& mesh : scene.meshes)
+            for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+                const vec3 n = mesh.normals[mesh.indices[3 * t]] + mesh.normals[mesh.indices[3 * t + 1]] +
+                               mesh.normals[mesh.indices[3 * t + 2]];
+                (glm::dot(faceNormal(mesh, t), n) > 0.0f ? agree : disagree)++;
+            }
+        CHECK(agree > 0);
+        CHECK(disagree == 0);
+    }
+}
