@@ -322,3 +322,22 @@ TEST_CASE("gatherTriangles maps global ids back to mesh and local triangle", "[t
                         Catch::Contains("two-meshes.gltf") && Catch::Contains("wall/0") && Catch::Contains("triangle 0") &&
                             Catch::Contains("index 7"));
 }
+
+TEST_CASE("Rays with a zero or NaN direction find nothing and terminate", "[trace]") {
+    const SceneTriangles tris = randomSoup(2000, 4, 0.1f);
+    const Bvh bvh = Bvh::build(tris);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (const vec3 direction : {vec3(0.0f), vec3(nan, 0.0f, 1.0f), vec3(nan)}) {
+        for (const bool wide : {true, false}) {
+            BvhView view = bvh.view();
+            if (!wide) view.wideNodes = nullptr;
+            Ray ray;
+            ray.origin = vec3(0.5f);  // inside the soup
+            ray.direction = direction;
+            Hit hit;
+            REQUIRE_FALSE(intersectClosest(view, ray, hit));
+            REQUIRE(hit.triangle == ~0u);
+            REQUIRE_FALSE(intersectAny(view, ray));
+        }
+    }
+}
