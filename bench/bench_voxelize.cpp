@@ -98,16 +98,19 @@ int main(int argc, char** argv) {
         vl::VoxelSettings settings;
         settings.resolution = resolution;
         const double h = vl::voxelSizeFor(scene, settings);
-        const int repetitions = resolution <= 256 ? 3 : 2;
+        const int repetitions = 3;
 
         struct Variant {
             const char* name;
             const vl::Scene* scene;
             int samples;
+            bool fillInterior;
         };
-        for (const Variant& variant : {Variant{"voxlight", &scene, 4}, Variant{"vl tex s=4", &textured, 4},
-                                       Variant{"vl tex s=1", &textured, 1}}) {
+        for (const Variant& variant :
+             {Variant{"voxlight", &scene, 4, false}, Variant{"vl tex s=4", &textured, 4, false},
+              Variant{"vl tex s=1", &textured, 1, false}, Variant{"vl fill", &scene, 4, true}}) {
             settings.texelSamples = variant.samples;
+            settings.fillInterior = variant.fillInterior;
             vl::VoxelizeStats stats;
             size_t active = 0;
             const double seconds = bestSeconds(repetitions, [&] {
@@ -133,7 +136,8 @@ int main(int argc, char** argv) {
                     "-", mib(double(grid->memUsage())), mib(dense), double(grid->memUsage()) / dense);
         std::printf("%-6d voxel size %.5f m\n", resolution, h);
     }
-    std::printf("voxlight: the scene's own materials; vl tex: under a checker texture, s = texelSamples.\n"
+    std::printf("voxlight: the scene's own materials; vl tex: under a checker texture, s = texelSamples;\n"
+                "vl fill: with fillInterior (closed meshes made solid through their depth).\n"
                 "voxlight MiB: coords + albedo, normal, six axis weights, (emission), opacity, solid as arrays;\n"
                 "dense: the same channels over the active bounding box. meshToVolume: one float grid (memUsage)\n"
                 "against a dense float array over its active bounding box.\n");
