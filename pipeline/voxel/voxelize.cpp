@@ -11,7 +11,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
+#include <limits>
 #include <sstream>
 #include <unordered_map>
 
@@ -205,6 +207,149 @@ bool isClosedMesh(const Mesh& mesh) {
     for (const auto& [key, balance] : directed)
         if (balance != 0) return false;
     return true;
+}
+
+// fillInterior. A ray along +z through every voxel column centre (i, j) crosses the closed
+// meshes; the winding number (+1 entering against an outward normal, −1 leaving) is
+// positive inside, so a room modelled facing inward is not filled. Shared edges are
+// counted once: each edge function is evaluated with its endpoints in a canonical order,
+// and a point exactly on an edge belongs to the triangle on one fixed side of it.
+struct InsideVoxel {
+    uint64_t key;
+    vec3 albedo;  // baseColorFactor of the surface the column entered through
+};
+
+std::vector<InsideVoxel> voxelsInsideClosedMeshes(const Scene& scene, const std::vector<TriangleRef>& triangles,
+                                                  const std::vector<TriangleInfo>& info,
+                                                  const std::vector<MeshShading>& shading, const KeyPacker& packer,
+                                                  double h) {
+    struct Crossing {
+        uint64_t column;
+        double z;
+        uint32_t triangle;
+        int delta;
+    };
+    std::vector<uint8_t> closed(scene.meshes.size());
+    for (size_t m = 0; m < scene.meshes.size(); ++m) closed[m] = isClosedMesh(scene.meshes[m]);
+
+    // Edge function of the directed edge a→b at (x, y), from canonically ordered endpoints,
+    // and whether the order was swapped.
+    auto edge = [](const dvec3& a, const dvec3& b, double x, double y) {
+        const bool swap = b.x < a.x || (b.x == a.x && b.y < a.y);
+        const dvec3& s = swap ? b : a;
+        const dvec3& e = swap ? a : b;
+        const double w = (e.x - s.x) * (y - s.y) - (e.y - s.y) * (x - s.x);
+        return std::make_pair(swap ? -w : w, swap);
+    };
+    tbb::enumerable_thread_specific<std::vector<Crossing>> perThread;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 256), [&](const tbb::blocked_range<size_t>& range) {
+        auto& crossings = perThread.local();
+        for (size_t id = range.begin(); id != range.end(); ++id) {
+            const TriangleRef ref = triangles[id];
+            if (!closed[ref.mesh] || info[id].normal.z == 0.0f) continue;
+            const Mesh& mesh = scene.meshes[ref.mesh];
+            const dvec3 q[3] = {toVoxelUnits(mesh.positions[mesh.indices[3 * ref.triangle]], h),
+                                toVoxelUnits(mesh.positions[mesh.indices[3 * ref.triangle + 1]], h),
+                                toVoxelUnits(mesh.positions[mesh.indices[3 * ref.triangle + 2]], h)};
+            const double orientation =
+                (q[1].x - q[0].x) * (q[2].y - q[0].y) - (q[1].y - q[0].y) * (q[2].x - q[0].x);
+            if (orientation == 0.0) continue;
+            const double sign = orientation > 0.0 ? 1.0 : -1.0;
+            const dvec3 lo = glm::min(q[0], glm::min(q[1], q[2]));
+            const dvec3 hi = glm::max(q[0], glm::max(q[1], q[2]));
+            const int delta = info[id].normal.z < 0.0f ? 1 : -1;
+            const dvec3 n(info[id].normal);
+            for (int i = static_cast<int>(std::ceil(lo.x)); i <= static_cast<int>(std::floor(hi.x)); ++i)
+                for (int j = static_cast<int>(std::ceil(lo.y)); j <= static_cast<int>(std::floor(hi.y)); ++j) {
+                    bool inside = true;
+                    for (int e = 0; e < 3 && inside; ++e) {
+                        const auto [w, swapped] = edge(q[e], q[(e + 1) % 3], i, j);
+                        const double ws = sign * w;
+                        inside = ws > 0.0 || (ws == 0.0 && (swapped != (sign < 0.0)));
+                    }
+                    if (!inside) continue;
+                    const double z = q[0].z - (n.x * (i - q[0].x) + n.y * (j - q[0].y)) / n.z;
+                    crossings.push_back({packer.pack(ivec3(i, j, packer.origin.z)), z, static_cast<uint32_t>(id), delta});
+                }
+        }
+    });
+    std::vector<Crossing> crossings;
+    for (auto& local : perThread) crossings.insert(crossings.end(), local.begin(), local.end());
+    // (column, z, triangle) is unique: the order, and so the output, is thread-independent.
+    tbb::parallel_sort(crossings.begin(), crossings.end(), [](const Crossing& a, const Crossing& b) {
+        if (a.column != b.column) return a.column < b.column;
+        if (a.z != b.z) return a.z < b.z;
+        return a.triangle < b.triangle;
+    });
+
+    // Voxel centres strictly between a crossing that leaves the winding positive and the
+    // next one; in key order, as columns and z both increase.
+    std::vector<InsideVoxel> inside;
+    for (size_t c = 0; c < crossings.size();) {
+        size_t end = c;
+        while (end < crossings.size() && crossings[end].column == crossings[c].column) ++end;
+        const ivec3 column = packer.unpack(crossings[c].column);
+        int winding = 0;
+        for (size_t x = c; x + 1 < end; ++x) {
+            winding += crossings[x].delta;
+            if (winding <= 0) continue;
+            const int k0 = static_cast<int>(std::floor(crossings[x].z)) + 1;
+            const int k1 = static_cast<int>(std::ceil(crossings[x + 1].z)) - 1;
+            const vec3 albedo = shading[triangles[crossings[x].triangle].mesh].baseColor;
+            for (int k = k0; k <= k1; ++k) inside.push_back({packer.pack(ivec3(column.x, column.y, k)), albedo});
+        }
+        c = end;
+    }
+    return inside;
+}
+
+// Surface voxels whose centre is inside become solid (α = 1, their surface attributes
+// kept); inside voxels the surface does not reach are added. Returns how many were added.
+size_t mergeInside(VoxelScene& voxels, const std::vector<InsideVoxel>& inside, const KeyPacker& packer) {
+    const bool withEmission = !voxels.emission.empty();
+    VoxelScene merged;
+    const size_t reserve = voxels.size() + inside.size();
+    merged.coords.reserve(reserve);
+    merged.albedo.reserve(reserve);
+    merged.normal.reserve(reserve);
+    merged.axisWeights.reserve(reserve);
+    merged.opacity.reserve(reserve);
+    merged.solid.reserve(reserve);
+    if (withEmission) merged.emission.reserve(reserve);
+    auto copySurface = [&](size_t v, bool isInside) {
+        merged.coords.push_back(voxels.coords[v]);
+        merged.albedo.push_back(voxels.albedo[v]);
+        merged.normal.push_back(voxels.normal[v]);
+        merged.axisWeights.push_back(voxels.axisWeights[v]);
+        if (withEmission) merged.emission.push_back(voxels.emission[v]);
+        merged.opacity.push_back(isInside ? 1.0f : voxels.opacity[v]);
+        merged.solid.push_back(isInside ? 1 : voxels.solid[v]);
+    };
+    size_t s = 0, added = 0;
+    for (const InsideVoxel& iv : inside) {
+        while (s < voxels.size() && packer.pack(voxels.coords[s]) < iv.key) copySurface(s++, false);
+        if (s < voxels.size() && packer.pack(voxels.coords[s]) == iv.key) {
+            copySurface(s++, true);
+            continue;
+        }
+        merged.coords.push_back(packer.unpack(iv.key));
+        merged.albedo.push_back(iv.albedo);
+        merged.normal.push_back(vec3(0.0f));
+        merged.axisWeights.push_back(AxisWeights{0, 0, 0, 0, 0, 0});
+        if (withEmission) merged.emission.push_back(vec3(0.0f));
+        merged.opacity.push_back(1.0f);
+        merged.solid.push_back(1);
+        ++added;
+    }
+    while (s < voxels.size()) copySurface(s++, false);
+    voxels.coords = std::move(merged.coords);
+    voxels.albedo = std::move(merged.albedo);
+    voxels.normal = std::move(merged.normal);
+    voxels.axisWeights = std::move(merged.axisWeights);
+    voxels.emission = std::move(merged.emission);
+    voxels.opacity = std::move(merged.opacity);
+    voxels.solid = std::move(merged.solid);
+    return added;
 }
 
 }  // namespace
@@ -435,128 +580,8 @@ VoxelScene voxelize(const Scene& scene, const VoxelSettings& settings, Progress*
 
     size_t interior = 0;
     if (settings.fillInterior) {
-        // A ray along +z through every voxel column centre (i, j) crosses the closed meshes;
-        // the winding number (+1 entering against an outward normal, −1 leaving) is positive
-        // inside. Shared edges are counted once by evaluating each edge function with its
-        // endpoints in a canonical order and including zero on one side only.
-        struct Crossing {
-            uint64_t column;
-            double z;
-            uint32_t triangle;
-            int delta;
-        };
-        std::vector<uint8_t> closed(scene.meshes.size());
-        for (size_t m = 0; m < scene.meshes.size(); ++m) closed[m] = isClosedMesh(scene.meshes[m]);
-        tbb::enumerable_thread_specific<std::vector<Crossing>> perThreadCrossings;
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 256), [&](const tbb::blocked_range<size_t>& range) {
-            auto& crossings = perThreadCrossings.local();
-            for (size_t id = range.begin(); id != range.end(); ++id) {
-                const TriangleRef ref = triangles[id];
-                if (!closed[ref.mesh] || info[id].normal.z == 0.0f) continue;
-                const Mesh& mesh = scene.meshes[ref.mesh];
-                const dvec3 q[3] = {toVoxelUnits(mesh.positions[mesh.indices[3 * ref.triangle]], h),
-                                    toVoxelUnits(mesh.positions[mesh.indices[3 * ref.triangle + 1]], h),
-                                    toVoxelUnits(mesh.positions[mesh.indices[3 * ref.triangle + 2]], h)};
-                // Edge function of the directed edge a→b at (x, y), from canonically ordered endpoints.
-                auto edge = [](const dvec3& a, const dvec3& b, double x, double y) {
-                    const bool swap = b.x < a.x || (b.x == a.x && b.y < a.y);
-                    const dvec3& s = swap ? b : a;
-                    const dvec3& e = swap ? a : b;
-                    const double w = (e.x - s.x) * (y - s.y) - (e.y - s.y) * (x - s.x);
-                    return std::make_pair(swap ? -w : w, swap);
-                };
-                const double orientation = (q[1].x - q[0].x) * (q[2].y - q[0].y) - (q[1].y - q[0].y) * (q[2].x - q[0].x);
-                if (orientation == 0.0) continue;
-                const double sign = orientation > 0.0 ? 1.0 : -1.0;
-                const dvec3 lo = glm::min(q[0], glm::min(q[1], q[2]));
-                const dvec3 hi = glm::max(q[0], glm::max(q[1], q[2]));
-                const int delta = info[id].normal.z < 0.0f ? 1 : -1;
-                const dvec3 n(info[id].normal);
-                for (int i = static_cast<int>(std::ceil(lo.x)); i <= static_cast<int>(std::floor(hi.x)); ++i)
-                    for (int j = static_cast<int>(std::ceil(lo.y)); j <= static_cast<int>(std::floor(hi.y)); ++j) {
-                        bool inside = true;
-                        for (int e = 0; e < 3 && inside; ++e) {
-                            const auto [w, swapped] = edge(q[e], q[(e + 1) % 3], i, j);
-                            const double ws = sign * w;
-                            // On the edge: the side is fixed by the canonical direction, so of
-                            // two triangles sharing it exactly one takes the point.
-                            inside = ws > 0.0 || (ws == 0.0 && (swapped != (sign < 0.0)));
-                        }
-                        if (!inside) continue;
-                        const double z = q[0].z - (n.x * (i - q[0].x) + n.y * (j - q[0].y)) / n.z;
-                        crossings.push_back({packer.pack(ivec3(i, j, packer.origin.z)), z, static_cast<uint32_t>(id), delta});
-                    }
-            }
-        });
-        std::vector<Crossing> crossings;
-        for (auto& local : perThreadCrossings) crossings.insert(crossings.end(), local.begin(), local.end());
-        tbb::parallel_sort(crossings.begin(), crossings.end(), [](const Crossing& a, const Crossing& b) {
-            if (a.column != b.column) return a.column < b.column;
-            if (a.z != b.z) return a.z < b.z;
-            return a.triangle < b.triangle;
-        });
-
-        // Inside voxels per column, in key order; merged with the surface voxels below.
-        struct InsideVoxel {
-            uint64_t key;
-            vec3 albedo;
-        };
-        std::vector<InsideVoxel> inside;
-        for (size_t c = 0; c < crossings.size();) {
-            size_t end = c;
-            while (end < crossings.size() && crossings[end].column == crossings[c].column) ++end;
-            int winding = 0;
-            for (size_t x = c; x + 1 < end; ++x) {
-                winding += crossings[x].delta;
-                if (winding <= 0) continue;
-                const int k0 = static_cast<int>(std::floor(crossings[x].z)) + 1;
-                const int k1 = static_cast<int>(std::ceil(crossings[x + 1].z)) - 1;
-                // The material of the surface through which this run of the column was entered.
-                const vec3 albedo = shading[triangles[crossings[x].triangle].mesh].baseColor;
-                const ivec3 column = packer.unpack(crossings[c].column);
-                for (int k = k0; k <= k1; ++k) inside.push_back({packer.pack(ivec3(column.x, column.y, k)), albedo});
-            }
-            c = end;
-        }
-        std::vector<Crossing>().swap(crossings);
-
-        // Merge: surface voxels whose centre is inside become solid; the rest are added.
-        VoxelScene merged;
-        const size_t reserve = out.size() + inside.size();
-        merged.coords.reserve(reserve);
-        size_t s = 0;
-        auto copySurface = [&](size_t v, bool isInside) {
-            merged.coords.push_back(out.coords[v]);
-            merged.albedo.push_back(out.albedo[v]);
-            merged.normal.push_back(out.normal[v]);
-            merged.axisWeights.push_back(out.axisWeights[v]);
-            if (withEmission) merged.emission.push_back(out.emission[v]);
-            merged.opacity.push_back(isInside ? 1.0f : out.opacity[v]);
-            merged.solid.push_back(isInside ? 1 : out.solid[v]);
-        };
-        for (const InsideVoxel& iv : inside) {
-            while (s < out.size() && packer.pack(out.coords[s]) < iv.key) copySurface(s++, false);
-            if (s < out.size() && packer.pack(out.coords[s]) == iv.key) {
-                copySurface(s++, true);
-                continue;
-            }
-            merged.coords.push_back(packer.unpack(iv.key));
-            merged.albedo.push_back(iv.albedo);
-            merged.normal.push_back(vec3(0.0f));
-            merged.axisWeights.push_back(AxisWeights{0, 0, 0, 0, 0, 0});
-            if (withEmission) merged.emission.push_back(vec3(0.0f));
-            merged.opacity.push_back(1.0f);
-            merged.solid.push_back(1);
-            ++interior;
-        }
-        while (s < out.size()) copySurface(s++, false);
-        out.coords = std::move(merged.coords);
-        out.albedo = std::move(merged.albedo);
-        out.normal = std::move(merged.normal);
-        out.axisWeights = std::move(merged.axisWeights);
-        out.emission = std::move(merged.emission);
-        out.opacity = std::move(merged.opacity);
-        out.solid = std::move(merged.solid);
+        const std::vector<InsideVoxel> inside = voxelsInsideClosedMeshes(scene, triangles, info, shading, packer, h);
+        interior = mergeInside(out, inside, packer);
     }
 
     if (stats) {
