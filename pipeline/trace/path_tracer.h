@@ -1,7 +1,9 @@
 // The reference path tracer's host entry points: camera images and irradiance at surface
 // samples (lightmap texels), each split into direct and indirect light. Work runs on TBB over
-// rows / element blocks; every pixel or element draws sample j from Pcg32::forItem(index, j,
-// seed), so the output bytes do not depend on the thread count or on how the work is split.
+// rows / element blocks; every pixel or element draws sample j's path from
+// Pcg32::forItem(index, j, seed) (camera pixel and lens positions from a stratified pattern
+// rotated per pixel, trace/sample_patterns.h), so the output bytes do not depend on the
+// thread count or on how the work is split.
 // The per-path kernels are in trace/path_kernels.h.
 #pragma once
 
@@ -32,7 +34,9 @@ struct TraceResult {
     Image direct;
     Image indirect;
     Image albedo;    // camera: base colour at the first hit; irradiance: mean sample albedo
-    Image variance;  // RGB: variance of each pixel's mean (sample variance / spp) of beauty
+    Image variance;  // RGB: variance of each pixel's mean as if its samples were independent
+                     // (sample variance / spp); an overestimate where the stratified pixel
+                     // pattern resolves an edge
     uint64_t nonFiniteSamples = 0;  // samples dropped for a NaN/Inf value (counted, never written)
     uint64_t paths = 0;
     double seconds = 0.0;
