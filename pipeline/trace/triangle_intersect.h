@@ -96,8 +96,17 @@ VL_HOSTDEV inline bool intersectTriangle(const WatertightRay& ray, const vec3& v
 
     const float det = u + v + w;
     if (det == 0.0f) return false;
+    // Reject by distance before dividing (most candidates in a leaf are behind the closest
+    // hit); the exact test on t below decides the rest.
+    // t·|det| against tMin·|det| and tMax·|det|, with a margin far above their rounding.
+    const float scaledT = ray.sz * (u * az + v * bz + w * cz);
+    const float absDet = glm::abs(det);
+    const float tTimesAbsDet = det > 0.0f ? scaledT : -scaledT;
+    const float lowest = tMin * absDet, highest = tMax * absDet;
+    if (tTimesAbsDet < lowest - glm::abs(lowest) * 0x1p-20f || tTimesAbsDet > highest + glm::abs(highest) * 0x1p-20f)
+        return false;
     const float invDet = 1.0f / det;
-    const float t = ray.sz * (u * az + v * bz + w * cz) * invDet;
+    const float t = scaledT * invDet;
     // Written so a NaN t is rejected.
     if (!(t > tMin && t < tMax)) return false;
     hit.t = t;
