@@ -154,6 +154,12 @@ VL_HOSTDEV inline int wrapTexel(int i, int size, uint32_t mode) {
     return m < 0 ? m + size : m;
 }
 
+VL_HOSTDEV inline float reduceTexelCoordinate(float f, int size, uint32_t mode) {
+    const float period = 2.0f * static_cast<float>(size);
+    if (mode == 1) return glm::clamp(f, -1.0f, static_cast<float>(size));
+    return f - period * glm::floor(f / period);
+}
+
 VL_HOSTDEV inline vec4 fetchTexel(const TraceSceneView& s, const TraceTexture& t, int x, int y) {
     const float* p = s.texels + t.offset + 4 * (static_cast<size_t>(wrapTexel(y, t.height, t.wrapT)) * t.width +
                                                 static_cast<size_t>(wrapTexel(x, t.width, t.wrapS)));
@@ -168,11 +174,11 @@ VL_HOSTDEV inline vec4 sampleTraceTexture(const TraceSceneView& s, const TraceTe
     const float u = ref.m[0] * in.x + ref.m[1] * in.y + ref.m[2];
     const float v = ref.m[3] * in.x + ref.m[4] * in.y + ref.m[5];
     if (!isFinite(u) || !isFinite(v)) return vec4(0.0f);
-    // Wrap far coordinates into a few periods first so the float → int conversion stays exact.
-    const float fx = u * static_cast<float>(t.width) - 0.5f;
-    const float fy = v * static_cast<float>(t.height) - 0.5f;
-    const float px = fx - 2.0f * static_cast<float>(t.width) * glm::floor(fx / (2.0f * static_cast<float>(t.width)));
-    const float py = fy - 2.0f * static_cast<float>(t.height) * glm::floor(fy / (2.0f * static_cast<float>(t.height)));
+    // Bring far coordinates near the image first so the float → int conversion stays exact:
+    // shift by whole periods of 2·size (a period of both repeat and mirrored repeat), or
+    // clamp just outside the image for clamp-to-edge.
+    const float px = reduceTexelCoordinate(u * static_cast<float>(t.width) - 0.5f, t.width, t.wrapS);
+    const float py = reduceTexelCoordinate(v * static_cast<float>(t.height) - 0.5f, t.height, t.wrapT);
     if (t.nearest) return fetchTexel(s, t, static_cast<int>(glm::floor(px + 0.5f)), static_cast<int>(glm::floor(py + 0.5f)));
     const int x0 = static_cast<int>(glm::floor(px));
     const int y0 = static_cast<int>(glm::floor(py));
