@@ -46,6 +46,8 @@ namespace {
 // Subtrees smaller than this are built on the calling thread: spawning costs more.
 constexpr uint32_t kParallelThreshold = 4096;
 
+constexpr int kMaxBins = 64;  // validate() keeps BvhSettings::bins within it
+
 struct BinnedBounds {
     Aabb bounds;
     uint32_t count = 0;
@@ -122,9 +124,22 @@ private:
     uint32_t buildRange(uint32_t begin, uint32_t end, int depth) {
         const uint32_t n = end - begin;
         Aabb bounds, centroidBounds;
-        for (uint32_t i = begin; i < end; ++i) {
-            bounds.extend(triBounds_[order_[i]]);
-            centroidBounds.extend(centroids_[order_[i]]);
+        auto boundRange = [&](uint32_t b, uint32_t e, Aabb* out) {
+            for (uint32_t i = b; i < e; ++i) {
+                out[0].extend(triBounds_[order_[i]]);
+                out[1].extend(centroids_[order_[i]]);
+            }
+        };
+        if (n < kChunkedThreshold) {
+            Aabb out[2];
+            boundRange(begin, end, out);
+            bounds = out[0];
+            centroidBounds = out[1];
+        } else {
+            forChunks<Aabb>(begin, end, boundRange, 2, [&](const Aabb* part) {
+                bounds.extend(part[0]);
+                centroidBounds.extend(part[1]);
+            });
         }
         if (n == 1) return makeLeaf(begin, end, bounds);
 
@@ -192,38 +207,83 @@ private:
         return std::min(std::max(b, 0), bins - 1);
     }
 
+    // Ranges this large are bounded and binned in parallel chunks (the top of the tree,
+    // where parallel_invoke has not yet spread the work).
+    static constexpr uint32_t kChunkedThreshold = 65536;
+
+    // Runs work(b, e, partial) over fixed chunks of [begin, end) in parallel, each into its
+    // own `parts` default-initialised T values, then merge(partial) in chunk order. The
+    // chunking depends on the range only, and every merge here is a min/max or an integer
+    // sum, so the result is the same at any thread count (and equals the one-pass result).
+    template <typename T, typename Work, typename Merge>
+    static void forChunks(uint32_t begin, uint32_t end, Work&& work, size_t parts, Merge&& merge) {
+        constexpr uint32_t kChunk = 16384;
+        const uint32_t chunks = (end - begin + kChunk - 1) / kChunk;
+        std::vector<T> partial(size_t(chunks) * parts);
+        tbb::parallel_for(uint32_t(0), chunks, [&](uint32_t c) {
+            work(begin + c * kChunk, std::min(end, begin + (c + 1) * kChunk), partial.data() + size_t(c) * parts);
+        });
+        for (uint32_t c = 0; c < chunks; ++c) merge(partial.data() + size_t(c) * parts);
+    }
+
     Split findSplit(uint32_t begin, uint32_t end, const Aabb& bounds, const Aabb& centroidBounds) const {
-        constexpr int kMaxBins = 256;
         const int bins = settings_.bins;
+        float scale[3], lo[3];
+        for (int axis = 0; axis < 3; ++axis) {
+            scale[axis] = binScale(centroidBounds, axis);
+            lo[axis] = centroidBounds.lower[axis];
+        }
+        BinnedBounds bin[3][kMaxBins];
+        if (end - begin < kChunkedThreshold) {
+            for (int axis = 0; axis < 3; ++axis) {
+                if (scale[axis] == 0.0f) continue;
+                for (uint32_t i = begin; i < end; ++i) {
+                    const uint32_t id = order_[i];
+                    BinnedBounds& target = bin[axis][binOf(centroids_[id][axis], lo[axis], scale[axis], bins)];
+                    target.bounds.extend(triBounds_[id]);
+                    ++target.count;
+                }
+            }
+        } else {
+            forChunks<BinnedBounds>(begin, end, [&](uint32_t b, uint32_t e, BinnedBounds* out) {
+                for (int axis = 0; axis < 3; ++axis) {
+                    if (scale[axis] == 0.0f) continue;
+                    for (uint32_t i = b; i < e; ++i) {
+                        const uint32_t id = order_[i];
+                        BinnedBounds& target = out[axis * bins + binOf(centroids_[id][axis], lo[axis], scale[axis], bins)];
+                        target.bounds.extend(triBounds_[id]);
+                        ++target.count;
+                    }
+                }
+            }, size_t(3 * bins), [&](const BinnedBounds* part) {
+                for (int axis = 0; axis < 3; ++axis)
+                    for (int b = 0; b < bins; ++b) {
+                        bin[axis][b].bounds.extend(part[axis * bins + b].bounds);
+                        bin[axis][b].count += part[axis * bins + b].count;
+                    }
+            });
+        }
+
         Split best;
-        BinnedBounds bin[kMaxBins];
         float rightArea[kMaxBins];
         uint32_t rightCount[kMaxBins];
         const float nodeArea = bounds.surfaceArea();
         for (int axis = 0; axis < 3; ++axis) {
-            const float scale = binScale(centroidBounds, axis);
-            if (scale == 0.0f) continue;
-            const float lo = centroidBounds.lower[axis];
-            for (int b = 0; b < bins; ++b) bin[b] = BinnedBounds{};
-            for (uint32_t i = begin; i < end; ++i) {
-                const uint32_t id = order_[i];
-                BinnedBounds& target = bin[binOf(centroids_[id][axis], lo, scale, bins)];
-                target.bounds.extend(triBounds_[id]);
-                ++target.count;
-            }
+            if (scale[axis] == 0.0f) continue;
+            const BinnedBounds* axisBins = bin[axis];
             Aabb acc;
             uint32_t count = 0;
             for (int b = bins - 1; b > 0; --b) {
-                acc.extend(bin[b].bounds);
-                count += bin[b].count;
+                acc.extend(axisBins[b].bounds);
+                count += axisBins[b].count;
                 rightArea[b] = acc.surfaceArea();
                 rightCount[b] = count;
             }
             acc = Aabb{};
             count = 0;
             for (int b = 0; b < bins - 1; ++b) {
-                acc.extend(bin[b].bounds);
-                count += bin[b].count;
+                acc.extend(axisBins[b].bounds);
+                count += axisBins[b].count;
                 if (count == 0 || rightCount[b + 1] == 0) continue;
                 const float cost = settings_.traversalCost * nodeArea +
                                    settings_.intersectionCost *
@@ -311,8 +371,8 @@ uint32_t collapseWide(const std::vector<BvhNode>& nodes, uint32_t binary, std::v
 }
 
 void validate(const BvhSettings& s) {
-    if (s.bins < 2 || s.bins > 256)
-        throw SettingsError("BVH setting bins = " + std::to_string(s.bins) + " is outside [2, 256]");
+    if (s.bins < 2 || s.bins > kMaxBins)
+        throw SettingsError("BVH setting bins = " + std::to_string(s.bins) + " is outside [2, " + std::to_string(kMaxBins) + "]");
     if (s.maxLeafSize < 1 || s.maxLeafSize > 1024)
         throw SettingsError("BVH setting maxLeafSize = " + std::to_string(s.maxLeafSize) + " is outside [1, 1024]");
     if (!(s.traversalCost >= 0.0f && std::isfinite(s.traversalCost)))

@@ -219,14 +219,16 @@ TEST_CASE("BVH layout holds its invariants and respects the leaf size", "[trace]
 }
 
 TEST_CASE("BVH is byte-identical at any thread count", "[trace]") {
-    // Large enough that subtrees are built in parallel (above the 4096-triangle threshold).
-    const SceneTriangles tris = randomSoup(60000, 9, 0.03f);
+    // Large enough that the top nodes are binned in parallel chunks (above 65536 triangles)
+    // and subtrees are built in parallel (above 4096).
+    const SceneTriangles tris = randomSoup(100000, 9, 0.03f);
     std::vector<Bvh> builds;
     for (const int threads : {1, 2, 4}) {
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
         builds.push_back(Bvh::build(tris));
     }
     REQUIRE(builds[0].nodes.size() > 1000);
+    checkTree(builds[0], tris);
     REQUIRE(sameBytes(builds[0], builds[1]));
     REQUIRE(sameBytes(builds[0], builds[2]));
 }
