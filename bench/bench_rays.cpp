@@ -310,7 +310,10 @@ int main(int argc, char** argv) {
             const RaySet& set = *sets[s];
             const size_t n = set.rays.size();
             ours[s].resize(n);
-            Timing mine[2], embree[2];
+            Timing mine[2];
+#if VOXLIGHT_HAVE_EMBREE
+            Timing embree[2];
+#endif
             for (int threads : {1, 2}) {
                 mine[threads - 1] = bestTime(threads, repeats, [&] {
                     if (set.shadow) {

@@ -6,7 +6,9 @@
 //   bool blocked = intersectAny(bvh.view(), shadowRay);   // segment (tMin, tMax)
 //
 // Both honour ray.tMin < t < ray.tMax; ray.direction need not be unit length (t is then in
-// units of the direction's length).
+// units of the direction's length). With BvhView::wideNodes set (Bvh::view() sets it) the
+// 4-wide nodes are walked, one SIMD slab test per node; without, the binary nodes: the hits
+// are the same, the wide walk is faster on the CPU. A CUDA launcher may copy either.
 #pragma once
 
 #include "trace/bvh.h"
