@@ -8,6 +8,8 @@
 #include "core/image_io.h"
 #include "scene/gltf_loader.h"
 #include "support/paths.h"
+#include "trace/bvh.h"
+#include "trace/trace_scene.h"
 
 #include <catch2/catch.hpp>
 
@@ -210,5 +212,51 @@ TEST_CASE("The Cornell atlas covers the texels Cycles' mask covers", "[bake]") {
         REQUIRE(centreAgree >= 65536 - 65536 / 200);
         REQUIRE(probesMissing == 0);
         REQUIRE(probes.coveredTexels <= cyclesCovered + cyclesCovered / 50);
+    }
+}
+
+TEST_CASE("Camera receivers: each probe lies on its pinhole ray with the normal toward the camera", "[bake]") {
+    Scene scene = floorScene();  // y = 0.5, x ∈ [−1, 1], z ∈ [−2, 2]
+    scene.materials[0].emissiveFactor = vec3(0.5f, 0.25f, 1.0f);
+    const SceneTriangles triangles = gatherTriangles(scene);
+    const Bvh bvh = Bvh::build(triangles);
+    const TraceScene trace = TraceScene::build(scene, triangles);
+    for (float height : {3.0f, -2.0f}) {  // from above and from below
+        Camera camera;
+        camera.position = vec3(0.0f, height, 0.0f);
+        camera.forward = vec3(0.0f, height > 0.5f ? -1.0f : 1.0f, 0.0f);
+        camera.up = vec3(0.0f, 0.0f, -1.0f);
+        camera.yfov = 1.4f;  // the plane's x edges cross pixels, its z edges lie outside the view
+        const CameraModel model = makeCameraModel(camera, 6, 6);
+        const CameraReceivers r = buildCameraReceivers(trace, bvh, model, 2);
+        const float facing = height > 0.5f ? 1.0f : -1.0f;
+        size_t partial = 0;
+        for (int y = 0; y < 6; ++y)
+            for (int x = 0; x < 6; ++x) {
+                const size_t i = static_cast<size_t>(y) * 6 + x;
+                const uint32_t count = r.receivers.sampleCount(i);
+                REQUIRE(r.mask.at(x, y) == Approx(count / 4.0f));
+                partial += count > 0 && count < 4;
+                for (uint32_t k = 0; k < count; ++k) {
+                    const SurfaceSample& s = r.receivers.samples[r.receivers.begin[i] + k];
+                    REQUIRE(s.position.y == Approx(0.5f));
+                    REQUIRE(s.normal == vec3(0.0f, facing, 0.0f));
+                    REQUIRE(s.weight == 0.25f);
+                    // On the ray from the camera through one of the pixel's 2 × 2 probe points.
+                    const vec3 d = glm::normalize(s.position - camera.position);
+                    bool onProbeRay = false;
+                    for (int j = 0; j < 2; ++j)
+                        for (int m = 0; m < 2; ++m) {
+                            const Ray ray = pinholeRay(model, vec2(x + (m + 0.5f) / 2.0f, y + (j + 0.5f) / 2.0f));
+                            onProbeRay = onProbeRay || glm::length(ray.direction - d) < 1e-5f;
+                        }
+                    REQUIRE(onProbeRay);
+                }
+                // The emitter plane is single-sided: seen from below it emits nothing.
+                const float emitted = height > 0.5f ? 0.5f * count / 4.0f : 0.0f;
+                REQUIRE(r.emission.at(x, y, 0) == Approx(emitted));
+                REQUIRE(r.albedo.at(x, y, 1) == Approx(0.5f * count / 4.0f));
+            }
+        REQUIRE(partial > 0);  // the plane's edges cross some pixels
     }
 }
