@@ -136,9 +136,19 @@ VL_HOSTDEV inline bool rayBoxInterval(const vec3& o, const vec3& d, const vec3& 
     return tIn <= tOut;
 }
 
+// The receiver a cone leaves: the height of the apex above the receiver's tangent plane
+// (metres) and the cosine between the cone axis and the receiver's normal. A cone's footprint
+// must not reach below that plane, where the receiver's own surface voxels lie: a grazing
+// cone wide enough to touch them would gather the receiver's own radiance (a floor lighting
+// itself). The default (infinite height) is a cone with no receiver plane.
+struct ConeOrigin {
+    float apexHeight = kInfinity;
+    float cosToNormal = 1.0f;
+};
+
 // One cone; `dir` unit, tanHalfAngle > 0, maxDistance in metres (≤ 0: none).
 VL_HOSTDEV inline ConeResult traceCone(const MipView& mips, const vec3& apex, const vec3& dir, float tanHalfAngle,
-                                       float stepFactor, float maxDistance) {
+                                       float stepFactor, float maxDistance, const ConeOrigin& origin = ConeOrigin()) {
     constexpr float kOpaque = 0.99f;
     ConeResult result;
     if (mips.levelCount <= 0 || !isFinite(apex) || !isFinite(dir)) return result;
@@ -153,10 +163,22 @@ VL_HOSTDEV inline ConeResult traceCone(const MipView& mips, const vec3& apex, co
     // Samples farther than a coarsest voxel and a half from the bounds read only zeros.
     float t = glm::max(0.0f, tIn - 1.5f * coarsestVoxel);
     while (t < tEnd && result.occlusion < kOpaque) {
-        const float step = glm::min(stepFactor * glm::max(h, 2.0f * t * tanHalfAngle), tEnd - t);
+        // A level-l sample reads voxel centres up to one level-l voxel away, and a level-l
+        // voxel that holds the receiver's surface has its centre up to half of one above it:
+        // the coarsest level a sample at height z may read is log2(z / 1.5h). A fractional
+        // level also reads the next coarser one, so the level itself stays one below that.
+        // The step follows the footprint actually sampled, so a clamped (finer) sample never
+        // steps over a wall one of its voxels thick. Heights only grow along the cone, so the
+        // bound taken at the step's start holds over the whole step.
+        const float planeLevel =
+            glm::log2(glm::max(origin.apexHeight + t * origin.cosToNormal, h) / (1.5f * h)) - 1.0f;
+        const float planeDiameter = h * glm::exp2(glm::max(planeLevel, 0.0f) + kConeLevelOffset);
+        const float step =
+            glm::min(stepFactor * glm::max(h, glm::min(2.0f * t * tanHalfAngle, planeDiameter)), tEnd - t);
         const float tMid = t + 0.5f * step;
         const float diameter = glm::max(h, 2.0f * tMid * tanHalfAngle);
-        const float level = glm::clamp(glm::log2(diameter / h) - kConeLevelOffset, 0.0f, maxLevel);
+        const float level =
+            glm::clamp(glm::min(glm::log2(diameter / h) - kConeLevelOffset, planeLevel), 0.0f, maxLevel);
         // Past the bounds, coarse samples still read the blurred border voxels: their centres
         // lie up to half a voxel outside and trilinear weights reach one voxel further.
         if (tMid > tOut + 1.5f * ldexpf(h, static_cast<int>(glm::ceil(level)))) break;
@@ -191,7 +213,11 @@ VL_HOSTDEV inline vec3 coneTraceIrradiance(const MipView& mips, const vec3& p, c
     for (int k = 0; k < set.count; ++k) {
         const vec3& d = set.directions[k];
         const vec3 dir = glm::normalize(d.x * tangent + d.y * bitangent + d.z * normal);
-        const ConeResult cone = traceCone(mips, apex, dir, tanHalfAngle, settings.stepFactor, settings.maxDistance);
+        ConeOrigin origin;
+        origin.apexHeight = settings.startOffset * mips.voxelSize;
+        origin.cosToNormal = d.z;
+        const ConeResult cone =
+            traceCone(mips, apex, dir, tanHalfAngle, settings.stepFactor, settings.maxDistance, origin);
         sum += set.weights[k] * cone.radiance;
         occluded += set.weights[k] * cone.occlusion;
     }

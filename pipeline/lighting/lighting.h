@@ -24,7 +24,7 @@ class Progress;
 enum class NormalWeighting {
     Lambert,   // max(N·L, 0) with the voxel's mean normal; 0 where normals cancel
     Villegas,  // W = N∘N, D_a = max(sign(N_a)·L_a, 0), cos = Σ_a W_a·D_a
-    SixAxis,   // Σ_faces w_face·max(dir_face·L, 0) / Σ w_face over the six axis weights
+    SixAxis,   // Σ_faces w_face·max(dir_face·L, 0) / Σ_axes max(w_+a, w_−a) over the six axis weights
 };
 
 // How visibility rays walk the grid. Both visit the same voxels in the same order and give

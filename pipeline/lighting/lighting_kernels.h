@@ -143,7 +143,12 @@ VL_HOSTDEV inline NormalWeight normalWeight(int mode, const vec3& n, const float
             const int axis = f >> 1;
             const float sign = (f & 1) ? -1.0f : 1.0f;
             const float facing = glm::max(sign * L[axis], 0.0f);
-            total += faces[f];
+            // Normalised by the larger face of each ± pair, not their sum (DESIGN.md's form):
+            // a double-sided surface (every Blender export) has equal ± weights, and the sum
+            // made its lit side reflect half the light it receives (measured: Cornell floor
+            // voxels at 0.50 of Lambert's exact irradiance; 1.000 with this). One-sided
+            // surfaces and corners are unchanged.
+            if (!(f & 1)) total += glm::max(faces[f], faces[f + 1]);
             sum += faces[f] * facing;
             if (facing > 0.0f) litFaces[axis] += faces[f] * sign;
         }

@@ -193,7 +193,9 @@ TEST_CASE("A two-sided thin sheet is lit from both sides under six-axis and neve
             for (size_t i = 0; i < voxels.size(); ++i) {
                 const vec3 d = light.position - voxels.centre(i);
                 const float r = glm::length(d);
-                const float expected = mode == NormalWeighting::SixAxis ? 0.5f * kInvPi * 2.0f * std::abs(d.z) / r / (r * r) / 2.0f : 0.0f;
+                // Six-axis normalises by the larger face of each ± pair: the lit face of a
+                // two-sided sheet reflects all it receives, I·|cosθ|/r² (not half of it).
+                const float expected = mode == NormalWeighting::SixAxis ? 0.5f * kInvPi * 2.0f * std::abs(d.z) / r / (r * r) : 0.0f;
                 bad += std::abs(voxels.radiance[i].x - expected) <= 1e-5f * expected ? 0 : 1;
             }
             INFO("side " << side << " mode " << toString(mode));

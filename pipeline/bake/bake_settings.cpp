@@ -1,0 +1,116 @@
+#include "bake/bake_settings.h"
+
+#include "core/error.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace vl {
+namespace {
+
+std::string real(double v) {
+    std::ostringstream out;
+    out << v;
+    return out.str();
+}
+
+}  // namespace
+
+const SettingsTable<BakeSettings>& bakeSettingsTable() {
+    using S = BakeSettings;
+    static const SettingsTable<BakeSettings> table = {
+        // Voxelization
+        {"resolution", "voxels along the scene's longest axis (default 128)",
+         [](S& s, const std::string& v) { s.voxel.resolution = parseIntSetting("resolution", v, 1, 1 << 21); }},
+        {"voxel-size", "voxel edge in metres; overrides resolution (default: from resolution)",
+         [](S& s, const std::string& v) { s.voxel.voxelSize = parseRealSetting("voxel-size", v, 1e-9, 1e9); }},
+        {"fill-interior", "mark voxels inside closed meshes solid (default false)",
+         [](S& s, const std::string& v) { s.voxel.fillInterior = parseBoolSetting("fill-interior", v); }},
+        {"texel-samples", "texture samples per axis over each voxel's surface piece (default 4)",
+         [](S& s, const std::string& v) { s.voxel.texelSamples = parseIntSetting("texel-samples", v, 1, 64); }},
+        // Voxel direct lighting
+        {"normal-weights", "voxel normal weighting: lambert, villegas or six-axis (default six-axis)",
+         [](S& s, const std::string& v) { s.lighting.normalWeights = parseNormalWeighting(v); }},
+        {"attenuation", "K_c,K_l,K_q of the paper's eq. 18 for every punctual light (default: glTF inverse square)",
+         [](S& s, const std::string& v) {
+             AttenuationCoefficients k;
+             char c1 = 0, c2 = 0;
+             std::istringstream in(v);
+             if (!(in >> k.constant >> c1 >> k.linear >> c2 >> k.quadratic) || c1 != ',' || c2 != ',' ||
+                 !(in >> std::ws).eof())
+                 throw SettingsError("setting attenuation: '" + v + "' is not K_c,K_l,K_q");
+             if (!(k.constant >= 0 && k.linear >= 0 && k.quadratic >= 0) ||
+                 !(k.constant + k.linear + k.quadratic > 0) || !std::isfinite(k.constant + k.linear + k.quadratic))
+                 throw SettingsError("setting attenuation: coefficients must be finite, non-negative, not all zero");
+             s.lighting.attenuation = k;
+         }},
+        {"voxel-emitter-strata", "n × n points per emissive triangle in the voxel lighting pass (default 3)",
+         [](S& s, const std::string& v) { s.lighting.emitterStrata = parseIntSetting("voxel-emitter-strata", v, 1, 32); }},
+        {"hdda", "skip empty space with NanoVDB's HDDA when stepping toward lights (default true)",
+         [](S& s, const std::string& v) {
+             s.lighting.traversal = parseBoolSetting("hdda", v) ? VisibilityTraversal::Hdda : VisibilityTraversal::Dda;
+         }},
+        // Cone tracing
+        {"cones", "cones per hemisphere: 6, 16 or 32 (default 16)",
+         [](S& s, const std::string& v) { s.cone.coneCount = parseIntSetting("cones", v, 1, 64); }},
+        {"aperture", "cone half-angle in degrees; 0 = the cone set's tiling angle (default 0)",
+         [](S& s, const std::string& v) { s.cone.apertureDegrees = static_cast<float>(parseRealSetting("aperture", v, 0, 89.9)); }},
+        {"cone-offset", "cone start offset along the normal, in voxels (default 1.5)",
+         [](S& s, const std::string& v) { s.cone.startOffset = static_cast<float>(parseRealSetting("cone-offset", v, 0, 16)); }},
+        {"step-factor", "cone step as a fraction of its diameter (default 0.5)",
+         [](S& s, const std::string& v) { s.cone.stepFactor = static_cast<float>(parseRealSetting("step-factor", v, 0.05, 4)); }},
+        {"cone-max-distance", "metres a cone marches at most; 0 = until opaque or out of the grid (default 0)",
+         [](S& s, const std::string& v) { s.cone.maxDistance = static_cast<float>(parseRealSetting("cone-max-distance", v, 0, 1e9)); }},
+        {"bounces", "voxel-to-voxel bounces before the final gather (default 2)",
+         [](S& s, const std::string& v) { s.bounces = parseIntSetting("bounces", v, 0, 1024); }},
+        // Receivers
+        {"lightmap-res", "lightmap atlas width and height in texels (default 256)",
+         [](S& s, const std::string& v) { s.lightmap.width = s.lightmap.height = parseIntSetting("lightmap-res", v, 1, 16384); }},
+        {"lightmap-subsamples", "n × n sub-texel probes per texel (default 4)",
+         [](S& s, const std::string& v) { s.lightmap.subsamplesPerAxis = parseIntSetting("lightmap-subsamples", v, 1, 8); }},
+        {"emitter-strata", "n × n shadow points per emissive triangle for the exact direct term (default 4)",
+         [](S& s, const std::string& v) { s.direct.emitterStrata = parseIntSetting("emitter-strata", v, 1, 64); }},
+        {"width", "image width in pixels (default 256)",
+         [](S& s, const std::string& v) { s.imageWidth = parseIntSetting("width", v, 1, 16384); }},
+        {"height", "image height in pixels (default 256)",
+         [](S& s, const std::string& v) { s.imageHeight = parseIntSetting("height", v, 1, 16384); }},
+        {"image-subsamples", "n × n primary rays per pixel (default 2)",
+         [](S& s, const std::string& v) { s.imageSubsamples = parseIntSetting("image-subsamples", v, 1, 16); }},
+        // Outputs
+        {"lightmaps", "write lightmaps (default true)",
+         [](S& s, const std::string& v) { s.outputs.lightmaps = parseBoolSetting("lightmaps", v); }},
+        {"images", "write camera images (default true)",
+         [](S& s, const std::string& v) { s.outputs.images = parseBoolSetting("images", v); }},
+        {"grids", "write grids.vdb (default true)",
+         [](S& s, const std::string& v) { s.outputs.grids = parseBoolSetting("grids", v); }},
+    };
+    return table;
+}
+
+void validateBakeSettings(const BakeSettings& s) {
+    validateConeSettings(s.cone, "bake settings");
+    s.lightmap.validate();
+    if (s.voxel.resolution < 1) throw SettingsError("setting resolution = " + std::to_string(s.voxel.resolution) + " must be at least 1");
+    if (s.voxel.voxelSize < 0.0 || !std::isfinite(s.voxel.voxelSize))
+        throw SettingsError("setting voxel-size = " + real(s.voxel.voxelSize) + " must be positive and finite");
+    if (s.bounces < 0 || s.bounces > 1024) throw SettingsError("setting bounces = " + std::to_string(s.bounces) + " is outside 0..1024");
+    if (s.direct.emitterStrata < 1 || s.direct.emitterStrata > 64)
+        throw SettingsError("setting emitter-strata = " + std::to_string(s.direct.emitterStrata) + " is outside 1..64");
+}
+
+std::string describeBakeSettings(const BakeSettings& s) {
+    std::ostringstream out;
+    out << "resolution=" << s.voxel.resolution << ", voxel-size=" << s.voxel.voxelSize
+        << ", fill-interior=" << s.voxel.fillInterior << ", normal-weights=" << toString(s.lighting.normalWeights)
+        << ", hdda=" << (s.lighting.traversal == VisibilityTraversal::Hdda) << ", cones=" << s.cone.coneCount
+        << ", aperture=" << s.cone.apertureDegrees << ", cone-offset=" << s.cone.startOffset
+        << ", step-factor=" << s.cone.stepFactor << ", bounces=" << s.bounces << ", lightmap-res=" << s.lightmap.width
+        << ", lightmap-subsamples=" << s.lightmap.subsamplesPerAxis << ", emitter-strata=" << s.direct.emitterStrata
+        << ", width=" << s.imageWidth << ", height=" << s.imageHeight;
+    if (s.lighting.attenuation)
+        out << ", attenuation=" << s.lighting.attenuation->constant << "," << s.lighting.attenuation->linear << ","
+            << s.lighting.attenuation->quadratic;
+    return out.str();
+}
+
+}  // namespace vl

@@ -1,0 +1,130 @@
+#include "bake/job_file.h"
+
+#include "core/error.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+namespace vl {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::string settingValue(const json& value) {
+    if (value.is_string()) return value.get<std::string>();
+    if (value.is_boolean()) return value.get<bool>() ? "true" : "false";
+    if (value.is_array()) {  // e.g. attenuation [K_c, K_l, K_q]
+        std::string joined;
+        for (const json& item : value) joined += (joined.empty() ? "" : ",") + settingValue(item);
+        return joined;
+    }
+    return value.dump();
+}
+
+void applySettings(BakeSettings& settings, const json& object, const std::string& where) {
+    if (!object.is_object()) throw SettingsError(where + ": \"settings\" must be an object");
+    for (const auto& [name, value] : object.items()) {
+        try {
+            applySetting(bakeSettingsTable(), settings, name, settingValue(value));
+        } catch (const SettingsError& e) {
+            throw SettingsError(where + ": " + e.what());
+        }
+    }
+}
+
+vec3 readVec3(const json& value, const std::string& where) {
+    if (!value.is_array() || value.size() != 3) throw InputError(where + " must be an array of 3 numbers");
+    vec3 v;
+    for (int i = 0; i < 3; ++i) {
+        if (!value[static_cast<size_t>(i)].is_number()) throw InputError(where + " must be an array of 3 numbers");
+        v[i] = value[static_cast<size_t>(i)].get<float>();
+        if (!std::isfinite(v[i])) throw InputError(where + " is not finite");
+    }
+    return v;
+}
+
+Light readLight(const json& object, const std::string& where) {
+    if (!object.is_object()) throw InputError(where + " must be an object");
+    Light light;
+    light.name = object.value("name", "added light");
+    const std::string type = object.value("type", "point");
+    if (type == "point") light.type = LightType::Point;
+    else if (type == "spot") light.type = LightType::Spot;
+    else if (type == "directional") light.type = LightType::Directional;
+    else throw InputError(where + ": type '" + type + "' is not point, spot or directional");
+    if (object.contains("color")) light.color = readVec3(object["color"], where + ".color");
+    light.intensity = object.value("intensity", 1.0f);
+    if (!(light.intensity >= 0.0f) || !std::isfinite(light.intensity))
+        throw InputError(where + ": intensity must be finite and non-negative");
+    light.range = object.value("range", 0.0f);
+    if (light.type != LightType::Directional) {
+        if (!object.contains("position")) throw InputError(where + ": a " + type + " light needs a position");
+        light.position = readVec3(object["position"], where + ".position");
+    }
+    if (light.type != LightType::Point) {
+        if (!object.contains("direction")) throw InputError(where + ": a " + type + " light needs a direction");
+        const vec3 d = readVec3(object["direction"], where + ".direction");
+        if (!(glm::length(d) > 0.0f)) throw InputError(where + ".direction is zero");
+        light.direction = glm::normalize(d);
+    }
+    if (light.type == LightType::Spot) {
+        light.innerConeAngle = object.value("innerConeAngle", 0.0f);
+        light.outerConeAngle = object.value("outerConeAngle", 0.7853981634f);
+        if (!(light.innerConeAngle >= 0.0f && light.innerConeAngle < light.outerConeAngle &&
+              light.outerConeAngle <= 0.5f * kPi))
+            throw InputError(where + ": cone angles must satisfy 0 ≤ inner < outer ≤ π/2");
+    }
+    return light;
+}
+
+}  // namespace
+
+std::string sceneOutputName(const std::string& scenePath) { return fs::path(scenePath).stem().string(); }
+
+std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& defaults,
+                                 const std::string& defaultOutputRoot) {
+    std::ifstream in(path);
+    if (!in) throw InputError(path + ": cannot open the job file");
+    json root;
+    try {
+        root = json::parse(in);
+    } catch (const json::exception& e) {
+        throw InputError(path + ": not valid JSON: " + e.what());
+    }
+    if (!root.is_object() || !root.contains("scenes") || !root["scenes"].is_array() || root["scenes"].empty())
+        throw InputError(path + ": a job file needs a non-empty \"scenes\" array");
+    const fs::path base = fs::path(path).parent_path();
+    auto resolve = [&](const std::string& p) { return fs::path(p).is_absolute() ? p : (base / p).lexically_normal().string(); };
+
+    BakeSettings global = defaults;
+    if (root.contains("settings")) applySettings(global, root["settings"], path);
+    const std::string outputRoot = root.contains("output") ? resolve(root["output"].get<std::string>()) : defaultOutputRoot;
+
+    std::vector<BakeJob> jobs;
+    for (size_t i = 0; i < root["scenes"].size(); ++i) {
+        const json& entry = root["scenes"][i];
+        const std::string where = path + ": scenes[" + std::to_string(i) + "]";
+        if (!entry.is_object() || !entry.contains("path") || !entry["path"].is_string())
+            throw InputError(where + " needs a \"path\" string");
+        BakeJob job;
+        job.scenePath = resolve(entry["path"].get<std::string>());
+        job.settings = global;
+        if (entry.contains("settings")) applySettings(job.settings, entry["settings"], where);
+        const std::string name = entry.value("name", sceneOutputName(job.scenePath));
+        job.outputDir = entry.contains("output") ? resolve(entry["output"].get<std::string>())
+                                                 : (fs::path(outputRoot) / name).string();
+        if (entry.contains("lights")) {
+            if (!entry["lights"].is_array()) throw InputError(where + ": \"lights\" must be an array");
+            for (size_t l = 0; l < entry["lights"].size(); ++l)
+                job.addedLights.push_back(readLight(entry["lights"][l], where + ".lights[" + std::to_string(l) + "]"));
+        }
+        jobs.push_back(std::move(job));
+    }
+    return jobs;
+}
+
+}  // namespace vl

@@ -1,0 +1,32 @@
+// Job files: many scenes in one batch, settings globally or per scene, lights added to
+// scenes that have none, a choice of outputs. Relative paths resolve against the job file.
+//
+// {
+//   "output": "output",                       // root folder for scenes without "output"
+//   "settings": { "resolution": 128, "lightmap-res": 512 },   // any bake setting, for all
+//   "scenes": [
+//     { "path": "scenes/cornell_box.gltf" },
+//     { "path": "level.glb", "name": "level", "output": "out/level",
+//       "settings": { "cones": 32, "images": false },
+//       "lights": [ { "name": "lamp", "type": "point", "position": [1, 2, 3],
+//                     "color": [1, 1, 1], "intensity": 5 } ] }      // W/sr (W/m² directional)
+//   ]
+// }
+#pragma once
+
+#include "bake/bake_job.h"
+
+#include <string>
+#include <vector>
+
+namespace vl {
+
+// `defaults` are the command line's settings; the file's global and per-scene settings
+// apply on top, in that order. InputError / SettingsError name the file and the scene.
+std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& defaults,
+                                 const std::string& defaultOutputRoot);
+
+// The folder name a scene bakes into: its file stem.
+std::string sceneOutputName(const std::string& scenePath);
+
+}  // namespace vl

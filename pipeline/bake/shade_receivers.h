@@ -1,0 +1,30 @@
+// Lights bake receivers: per element (lightmap texel or pixel), the exact direct term through
+// the BVH and the indirect term from cones through the radiance mips, both as E/π, plain and
+// multiplied by the samples' albedo (outgoing radiance for images). TBB over elements; each
+// sample seeds its own generator, so the result does not depend on the thread count.
+#pragma once
+
+#include "bake/direct_light.h"
+#include "cone/cone_settings.h"
+#include "cone/radiance_mips.h"
+#include "core/image.h"
+#include "trace/bvh.h"
+#include "trace/surface_samples.h"
+
+namespace vl {
+
+class Progress;
+
+struct ReceiverLighting {
+    Image direct;            // RGB E_direct/π per element
+    Image indirect;          // RGB E_indirect/π
+    Image directRadiance;    // RGB Σ w·albedo·E_direct/π (reflected light, for images)
+    Image indirectRadiance;  // RGB Σ w·albedo·E_indirect/π
+};
+
+// `mips` may be null (no indirect light: direct only).
+ReceiverLighting shadeReceivers(const SurfaceSampleSet& receivers, const TraceSceneView& scene, const BvhView& bvh,
+                                const MipView* mips, const ConeSettings& cone, const DirectLightSettings& direct,
+                                Progress* progress = nullptr);
+
+}  // namespace vl
