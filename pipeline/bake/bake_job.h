@@ -1,12 +1,10 @@
-// The bake: the product's main job (DESIGN.md data flow) for one scene.
-//   load → voxelize → voxel direct light → bounces → radiance mips ─┐
-//   load → BVH ─→ receivers (lightmap texels, camera pixels) ───────┴→ exact direct + cones → files
-// Outputs go to a staging folder beside the target and are moved into it only when every
-// file is complete, so a failed or interrupted bake never leaves a finished-looking file.
+// The bake as a file job for one scene: load the glTF (plus lights a job file adds), bake in
+// memory (bake.h), write lightmaps, images, grids.vdb and bake.json. Outputs go to a staging
+// folder beside the target and are moved into it only when every file is complete, so a
+// failed or interrupted bake never leaves a finished-looking file.
 #pragma once
 
-#include "bake/bake_settings.h"
-#include "scene/scene.h"
+#include "bake/bake.h"
 
 #include <string>
 #include <vector>
@@ -15,14 +13,9 @@ namespace vl {
 
 struct BakeJob {
     std::string scenePath;
-    std::string outputDir;         // e.g. output/<scene name>
+    std::string outputDir;           // e.g. output/<scene name>
     BakeSettings settings;
     std::vector<Light> addedLights;  // lights a job file adds to the scene
-};
-
-struct StageTime {
-    std::string stage;
-    double seconds = 0.0;
 };
 
 struct BakeReport {
@@ -47,9 +40,5 @@ struct BakeReport {
 
 // Runs one bake; returns a report instead of throwing for problems of the scene or settings.
 BakeReport runBake(const BakeJob& job);
-
-// Refuses, before any work, a bake whose estimated memory exceeds what the machine has
-// available (SettingsError with both figures).
-void checkMemoryBudget(const Scene& scene, const BakeSettings& settings, double voxelSize);
 
 }  // namespace vl

@@ -1,0 +1,173 @@
+#include "bake/bake.h"
+
+#include "bake/dilate.h"
+#include "bake/shade_receivers.h"
+#include "cone/bounces.h"
+#include "core/error.h"
+#include "core/progress.h"
+#include "lighting/lighting.h"
+#include "trace/bvh.h"
+#include "trace/camera.h"
+#include "trace/trace_scene.h"
+#include "voxel/voxelize.h"
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <unistd.h>
+
+namespace vl {
+namespace {
+
+double availableMemoryBytes() {
+    std::ifstream meminfo("/proc/meminfo");
+    std::string key, unit;
+    double kib = 0.0;
+    while (meminfo >> key >> kib >> unit)
+        if (key == "MemAvailable:") return kib * 1024.0;
+    return static_cast<double>(sysconf(_SC_AVPHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGESIZE));
+}
+
+double surfaceArea(const Scene& scene) {
+    double area = 0.0;
+    for (const Mesh& mesh : scene.meshes)
+        for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+            const vec3& a = mesh.positions[mesh.indices[3 * t]];
+            const vec3& b = mesh.positions[mesh.indices[3 * t + 1]];
+            const vec3& c = mesh.positions[mesh.indices[3 * t + 2]];
+            area += 0.5 * glm::length(glm::cross(b - a, c - a));
+        }
+    return area;
+}
+
+std::string gib(double bytes) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.1f GiB", bytes / (1024.0 * 1024.0 * 1024.0));
+    return text;
+}
+
+// Runs `work` as a named stage and records its wall time.
+template <typename F>
+auto timed(std::vector<StageTime>& stages, const std::string& name, F&& work) {
+    struct Record {
+        std::vector<StageTime>& stages;
+        const std::string& name;
+        std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+        ~Record() {
+            stages.push_back({name, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()});
+        }
+    } record{stages, name};
+    return work();
+}
+
+Image sumRgb(const Image& a, const Image& b) {
+    Image out = a;
+    for (size_t i = 0; i < out.pixels.size(); ++i) out.pixels[i] += b.pixels[i];
+    return out;
+}
+
+void checkLightAttenuationNames(const Scene& scene, const LightingSettings& lighting) {
+    for (const auto& entry : lighting.lightAttenuation) {
+        bool found = false;
+        for (const Light& light : scene.lights) found = found || light.name == entry.first;
+        if (!found)
+            throw SettingsError(scene.sourcePath + ": attenuation is set for light '" + entry.first +
+                                "', which the scene lacks");
+    }
+}
+
+}  // namespace
+
+void checkMemoryBudget(const Scene& scene, const BakeSettings& settings, double voxelSize) {
+    // A surface crosses about 1 to √3 voxels per h² of area; a voxel costs ~100 bytes of
+    // channels, as much again in voxelization fragments, and ~50 in mips. A receiver sample
+    // costs ~48 bytes, a texel or pixel ~64 per image kept.
+    const double voxels = 2.0 * surfaceArea(scene) / (voxelSize * voxelSize);
+    const double texels = settings.outputs.lightmaps
+        ? static_cast<double>(settings.lightmap.width) * settings.lightmap.height *
+              (48.0 * settings.lightmap.subsamplesPerAxis * settings.lightmap.subsamplesPerAxis + 64.0 * 6)
+        : 0.0;
+    const double pixels = settings.outputs.images
+        ? static_cast<double>(settings.imageWidth) * settings.imageHeight *
+              (48.0 * settings.imageSubsamples * settings.imageSubsamples + 64.0 * 8)
+        : 0.0;
+    const double estimate = voxels * 250.0 + texels + pixels;
+    const double available = availableMemoryBytes();
+    if (estimate > available)
+        throw SettingsError(scene.sourcePath + ": this bake would need about " + gib(estimate) + " of memory (" +
+                            std::to_string(static_cast<long long>(voxels)) + " voxels at voxel size " +
+                            std::to_string(voxelSize) + " m) but " + gib(available) +
+                            " is available: lower resolution, lightmap-res or the image size");
+}
+
+BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& diagnostics) {
+    validateBakeSettings(settings);
+    const double voxelSize = voxelSizeFor(scene, settings.voxel);
+    checkMemoryBudget(scene, settings, voxelSize);
+    checkLightAttenuationNames(scene, settings.lighting);
+    if (scene.lights.empty() && !scene.hasEmitters())
+        diagnostics.warn(scene.sourcePath + ": the scene has no lights and no emissive materials: the bake is black");
+
+    BakeResult result;
+    result.voxels = timed(result.stages, "voxelize", [&] {
+        Progress progress("voxelize", scene.triangleCount(), settings.quiet);
+        return voxelize(scene, settings.voxel, &progress);
+    });
+    timed(result.stages, "voxel light", [&] {
+        Progress progress("voxel light", result.voxels.size(), settings.quiet);
+        return lightVoxels(scene, result.voxels, settings.lighting, &progress);
+    });
+    timed(result.stages, "bounces", [&] {
+        propagateBounces(result.voxels, settings.cone, settings.bounces);
+        return 0;
+    });
+    result.mips = timed(result.stages, "mips", [&] { return buildRadianceMips(result.voxels); });
+    const MipView mipView = result.mips.view();
+
+    const SceneTriangles triangles = gatherTriangles(scene);
+    const Bvh bvh = timed(result.stages, "bvh", [&] { return Bvh::build(triangles); });
+    const TraceScene traceScene = TraceScene::build(scene, triangles);
+    const TraceSceneView sceneView = traceScene.view();
+    const BvhView bvhView = bvh.view();
+
+    if (settings.outputs.lightmaps) {
+        timed(result.stages, "lightmaps", [&] {
+            for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, settings.lightmap, diagnostics)) {
+                Progress progress("lightmap " + atlas.name, atlas.receivers.elementCount(), settings.quiet);
+                const ReceiverLighting lit = shadeReceivers(atlas.receivers, sceneView, bvhView, &mipView,
+                                                            settings.cone, settings.direct, &progress);
+                progress.finish();
+                BakedLightmap baked{atlas.name, sumRgb(lit.direct, lit.indirect), lit.direct, lit.indirect, atlas.mask,
+                                    atlas.coveredTexels};
+                // Padding texels take their covered neighbours' values, so bilinear filtering
+                // at chart edges does not bleed black.
+                for (Image* image : {&baked.total, &baked.direct, &baked.indirect}) dilatePadding(*image, atlas.mask);
+                result.lightmaps.push_back(std::move(baked));
+            }
+            return 0;
+        });
+    }
+
+    if (settings.outputs.images) {
+        timed(result.stages, "images", [&] {
+            std::vector<Camera> cameras = scene.cameras;
+            const float aspect = static_cast<float>(settings.imageWidth) / static_cast<float>(settings.imageHeight);
+            if (cameras.empty()) cameras.push_back(defaultCamera(scene.bounds(), aspect));
+            for (const Camera& camera : cameras) {
+                const CameraModel model = makeCameraModel(camera, settings.imageWidth, settings.imageHeight);
+                const CameraReceivers receivers = buildCameraReceivers(traceScene, bvh, model, settings.imageSubsamples);
+                Progress progress("image", receivers.receivers.elementCount(), settings.quiet);
+                const ReceiverLighting lit = shadeReceivers(receivers.receivers, sceneView, bvhView, &mipView,
+                                                            settings.cone, settings.direct, &progress);
+                progress.finish();
+                result.images.push_back({camera.name,
+                                         sumRgb(sumRgb(receivers.emission, lit.directRadiance), lit.indirectRadiance),
+                                         lit.directRadiance, lit.indirectRadiance, receivers.albedo});
+            }
+            return 0;
+        });
+    }
+    return result;
+}
+
+}  // namespace vl

@@ -1,0 +1,59 @@
+// The bake in memory: a Scene and BakeSettings in, lit voxels, radiance mips, lightmaps and
+// camera images out (DESIGN.md data flow).
+//   voxelize → voxel direct light → bounces → radiance mips ─┐
+//   BVH → receivers (lightmap texels, camera pixels) ────────┴→ exact direct + cones
+// bake_job.h wraps it with loading, checks and files.
+#pragma once
+
+#include "bake/bake_settings.h"
+#include "bake/receivers.h"
+#include "cone/radiance_mips.h"
+#include "core/diagnostics.h"
+#include "core/image.h"
+#include "scene/scene.h"
+#include "voxel/voxel_scene.h"
+
+#include <string>
+#include <vector>
+
+namespace vl {
+
+struct StageTime {
+    std::string stage;
+    double seconds = 0.0;
+};
+
+struct BakedLightmap {
+    std::string name;  // the atlas name ("lightmap" for the shared atlas)
+    Image total;       // RGB E/π, padding dilated
+    Image direct;
+    Image indirect;
+    Image mask;        // 1 channel: 1 covered, 0 padding
+    size_t coveredTexels = 0;
+};
+
+struct BakedImage {
+    std::string camera;
+    Image beauty;    // RGB radiance: emission + albedo·(E_direct + E_indirect)/π
+    Image direct;    // albedo·E_direct/π
+    Image indirect;  // albedo·E_indirect/π
+    Image albedo;
+};
+
+struct BakeResult {
+    VoxelScene voxels;  // lit, bounces included
+    RadianceMips mips;
+    std::vector<BakedLightmap> lightmaps;
+    std::vector<BakedImage> images;
+    std::vector<StageTime> stages;
+};
+
+// Checks that cost nothing (settings ranges, voxel count, memory) run first; throws
+// SettingsError / InputError before any expensive stage.
+BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& diagnostics);
+
+// Refuses, before any work, a bake whose estimated memory exceeds what the machine has
+// available (SettingsError with both figures).
+void checkMemoryBudget(const Scene& scene, const BakeSettings& settings, double voxelSize);
+
+}  // namespace vl
