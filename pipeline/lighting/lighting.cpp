@@ -230,6 +230,11 @@ NormalWeighting parseNormalWeighting(const std::string& name) {
 }
 
 LightingStats lightVoxels(const Scene& scene, VoxelScene& voxels, const LightingSettings& settings, Progress* progress) {
+    return lightVoxels(scene, voxels, settings, progress, nullptr);
+}
+
+LightingStats lightVoxels(const Scene& scene, VoxelScene& voxels, const LightingSettings& settings, Progress* progress,
+                          VoxelKernelRunner runner) {
     const auto start = std::chrono::steady_clock::now();
     validateSettings(scene, settings);
     validateVoxels(voxels);
@@ -276,6 +281,18 @@ LightingStats lightVoxels(const Scene& scene, VoxelScene& voxels, const Lighting
 
     std::atomic<uint64_t> evaluations{0};
     std::atomic<uint64_t> steps{0};
+    auto runnerPass = [&] {
+        std::vector<lighting::VoxelLighting> results(n);
+        lighting::KernelStats local;
+        runner(view, static_cast<uint32_t>(n), hierarchical, results.data(), local);
+        for (size_t i = 0; i < n; ++i) {
+            voxels.radiance[i] = results[i].radiance;
+            voxels.occlusion[i] = results[i].occlusion;
+        }
+        evaluations += local.evaluations;
+        steps += local.steps;
+        if (progress) progress->advance(n);
+    };
     auto pass = [&] {
         tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& range) {
             lighting::IndexAccessor accessor = view.grid->getAccessor();
@@ -293,7 +310,9 @@ LightingStats lightVoxels(const Scene& scene, VoxelScene& voxels, const Lighting
             if (progress) progress->advance(range.size());
         });
     };
-    if (settings.threads > 0) {
+    if (runner) {
+        runnerPass();
+    } else if (settings.threads > 0) {
         tbb::task_arena arena(settings.threads);
         arena.execute(pass);
     } else {

@@ -75,4 +75,17 @@ NormalWeighting parseNormalWeighting(const std::string& name);
 LightingStats lightVoxels(const Scene& scene, VoxelScene& voxels, const LightingSettings& settings,
                           Progress* progress = nullptr);
 
+// [added by cuda] The same, with `runner` in place of the TBB loop: it runs
+// lighting::shadeVoxel for voxels [0, voxelCount) into results (cuda/launchers.h passes the
+// GPU launcher, so validation, preparation and the kernel stay one implementation).
+namespace lighting {
+struct LightingView;
+struct VoxelLighting;
+struct KernelStats;
+}  // namespace lighting
+using VoxelKernelRunner = void (*)(const lighting::LightingView& view, uint32_t voxelCount, bool hierarchical,
+                                   lighting::VoxelLighting* results, lighting::KernelStats& stats);
+LightingStats lightVoxels(const Scene& scene, VoxelScene& voxels, const LightingSettings& settings,
+                          Progress* progress, VoxelKernelRunner runner);
+
 }  // namespace vl

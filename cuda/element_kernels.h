@@ -1,0 +1,156 @@
+// What one GPU thread computes: one pixel, texel or receiver element, as VL_HOSTDEV
+// functions over the same POD views the CPU stages read. The launchers (*.cu) call them per
+// thread; tests/cuda calls them on the host and checks them bit for bit against the CPU
+// stages (renderCamera, traceIrradiance, shadeReceivers), so the GPU path cannot drift from
+// the CPU one unnoticed on machines without a GPU.
+//
+// The per-element loops of trace/path_tracer.cpp and bake/shade_receivers.cpp are private
+// to those files; they are mirrored here (same seeds, same order, same double sums). The
+// kernels they call (traceCameraPath, traceReceiverPath, directIrradiance,
+// coneTraceIrradiance) are the stages' own.
+#pragma once
+
+#include "bake/direct_light.h"
+#include "cone/cone_set.h"
+#include "cone/cone_trace.h"
+#include "trace/camera.h"
+#include "trace/path_kernels.h"
+#include "trace/sample_patterns.h"
+#include "trace/surface_samples.h"
+
+#include <cstdint>
+
+namespace vl::cuda {
+
+// trace/path_tracer.cpp's stream salts.
+constexpr uint64_t kCameraSalt = 0x63616d657261ull;
+constexpr uint64_t kReceiverSalt = 0x7265636569766572ull;
+constexpr uint64_t kPatternSample = ~0ull;
+
+// One element's estimate, as path_tracer.cpp stores it into TraceResult's images.
+struct PathEstimate {
+    vec3 beauty{0.0f};
+    vec3 direct{0.0f};
+    vec3 indirect{0.0f};
+    vec3 albedo{0.0f};
+    vec3 variance{0.0f};
+    uint32_t dropped = 0;
+};
+
+// The running sums of one element's samples (double, as path_tracer.cpp's Accumulator).
+struct PathAccumulator {
+    glm::dvec3 beauty{0.0}, beautySq{0.0}, direct{0.0}, indirect{0.0}, albedo{0.0};
+    uint32_t dropped = 0;
+
+    VL_HOSTDEV void add(const PathSample& s) {
+        const vec3 total = s.direct + s.indirect;
+        if (!isFinite(total) || !isFinite(s.albedo)) {
+            ++dropped;
+            return;
+        }
+        const glm::dvec3 t(total);
+        beauty += t;
+        beautySq += t * t;
+        direct += glm::dvec3(s.direct);
+        indirect += glm::dvec3(s.indirect);
+        albedo += glm::dvec3(s.albedo);
+    }
+
+    VL_HOSTDEV PathEstimate finish(int n) const {
+        const double inv = 1.0 / n;
+        const glm::dvec3 mean = beauty * inv;
+        glm::dvec3 var(0.0);
+        if (n > 1) var = glm::max(glm::dvec3(0.0), (beautySq - beauty * mean) / (double(n) * (n - 1)));
+        PathEstimate e;
+        e.beauty = vec3(mean);
+        e.direct = vec3(direct * inv);
+        e.indirect = vec3(indirect * inv);
+        e.albedo = vec3(albedo * inv);
+        e.variance = vec3(var);
+        e.dropped = dropped;
+        return e;
+    }
+};
+
+// The settings a path kernel reads (PathTracerSettings without its host-only parts).
+struct PathKernelSettings {
+    int samplesPerPixel = 1;
+    PathSettings path;
+    PixelFilter filter = PixelFilter::Tent;
+    uint64_t salt = 0;  // settings.seed ^ kCameraSalt or ^ kReceiverSalt
+};
+
+// Camera pixel (x, y): spp thin-lens paths from the pixel's rotated stratified patterns.
+VL_HOSTDEV inline PathEstimate cameraPixel(const TraceSceneView& scene, const BvhView& bvh, const CameraModel& camera,
+                                           const PathKernelSettings& settings, int x, int y) {
+    const uint64_t index = static_cast<uint64_t>(y) * static_cast<uint64_t>(camera.width) + static_cast<uint64_t>(x);
+    Pcg32 patternRng = Pcg32::forItem(index, kPatternSample, settings.salt);
+    const vec2 pixelShift(patternRng.next1D(), patternRng.next1D());
+    const vec2 lensShift(patternRng.next1D(), patternRng.next1D());
+    const int spp = settings.samplesPerPixel;
+    PathAccumulator acc;
+    for (int j = 0; j < spp; ++j) {
+        Pcg32 rng = Pcg32::forItem(index, static_cast<uint64_t>(j), settings.salt);
+        const vec2 uPixel = rotatedHammersley(static_cast<uint32_t>(j), static_cast<uint32_t>(spp), pixelShift);
+        const vec2 uLens = rotatedHalton35(static_cast<uint32_t>(j), lensShift);
+        const Ray ray = thinLensRay(camera, pixelSamplePoint(x, y, uPixel, settings.filter), uLens);
+        acc.add(traceCameraPath(scene, bvh, ray, rng, settings.path));
+    }
+    return acc.finish(spp);
+}
+
+// Receiver element `element` with samples [samples, samples + count): E/π by white-receiver
+// paths, the spp shared among the samples by weight (see traceIrradiance). count 0: zero.
+VL_HOSTDEV inline PathEstimate receiverElementPaths(const TraceSceneView& scene, const BvhView& bvh,
+                                                    const SurfaceSample* samples, uint32_t count, uint64_t element,
+                                                    const PathKernelSettings& settings) {
+    if (count == 0) return PathEstimate{};
+    double totalWeight = 0.0;
+    for (uint32_t k = 0; k < count; ++k) totalWeight += samples[k].weight;
+    const int spp = settings.samplesPerPixel;
+    PathAccumulator acc;
+    uint32_t k = 0;
+    double cumulative = samples[0].weight;
+    for (int j = 0; j < spp; ++j) {
+        const double t = (j + 0.5) / spp;
+        while (t >= cumulative && k + 1 < count) cumulative += samples[++k].weight;
+        const bool background = t >= cumulative && totalWeight < 1.0 - 1e-5;
+        if (background) {
+            acc.add(PathSample{});
+            continue;
+        }
+        Pcg32 rng = Pcg32::forItem(element, static_cast<uint64_t>(j), settings.salt);
+        acc.add(traceReceiverPath(scene, bvh, samples[k], rng, settings.path));
+    }
+    return acc.finish(spp);
+}
+
+// One bake receiver element: the exact direct term and the cone-traced indirect term as
+// E/π, plain and times the samples' albedo (bake/shade_receivers.cpp's per-element loop).
+struct ElementLighting {
+    vec3 direct{0.0f};
+    vec3 indirect{0.0f};
+    vec3 directRadiance{0.0f};
+    vec3 indirectRadiance{0.0f};
+};
+
+// Samples [first, last) of `samples`; their index seeds the direct term's strata. `mips`
+// null: no indirect light.
+VL_HOSTDEV inline ElementLighting shadeReceiverElement(const TraceSceneView& scene, const BvhView& bvh,
+                                                       const MipView* mips, const ConeSet& set,
+                                                       const ConeSettings& cone, const DirectLightSettings& direct,
+                                                       const SurfaceSample* samples, uint32_t first, uint32_t last) {
+    ElementLighting out;
+    for (uint32_t i = first; i < last; ++i) {
+        const SurfaceSample& r = samples[i];
+        const vec3 ed = directIrradiance(scene, bvh, r, direct, i) * kInvPi;
+        const vec3 ei = mips ? coneTraceIrradiance(*mips, r.position, r.normal, set, cone) * kInvPi : vec3(0.0f);
+        out.direct += r.weight * ed;
+        out.indirect += r.weight * ei;
+        out.directRadiance += r.weight * r.albedo * ed;
+        out.indirectRadiance += r.weight * r.albedo * ei;
+    }
+    return out;
+}
+
+}  // namespace vl::cuda

@@ -1,0 +1,63 @@
+// The bake receivers launcher: thread (x, y) shades element (x, y) of the receiver image
+// (exact direct light through the BVH, indirect light by cones through the radiance mips).
+#include "cuda/device_views.cuh"
+#include "cuda/element_kernels.h"
+#include "cuda/launchers.h"
+
+namespace vl::cuda {
+
+namespace {
+
+__global__ void shadeReceiversKernel(TraceSceneView scene, BvhView bvh, MipView mips, int hasMips, ConeSet set,
+                                     ConeSettings cone, DirectLightSettings direct, const uint32_t* begin,
+                                     const SurfaceSample* samples, int width, int height, ElementLighting* out) {
+    const int x = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
+    const int y = static_cast<int>(blockIdx.y * blockDim.y + threadIdx.y);
+    if (x >= width || y >= height) return;
+    const size_t e = static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x);
+    out[e] = shadeReceiverElement(scene, bvh, hasMips ? &mips : nullptr, set, cone, direct, samples, begin[e],
+                                  begin[e + 1]);
+}
+
+}  // namespace
+
+ReceiverLighting shadeReceiversCuda(const SurfaceSampleSet& receivers, const TraceSceneView& scene,
+                                    const BvhView& bvh, const MipView* mips, const ConeSettings& cone,
+                                    const DirectLightSettings& direct) {
+    requireDevice();
+    const size_t elements = receivers.elementCount();
+    if (receivers.begin.size() != elements + 1)
+        throw Error("CUDA receivers: offsets do not match " + std::to_string(receivers.width) + " x " +
+                    std::to_string(receivers.height) + " elements");
+    ReceiverLighting out;
+    for (Image* image : {&out.direct, &out.indirect, &out.directRadiance, &out.indirectRadiance})
+        *image = Image(receivers.width, receivers.height, 3);
+    if (elements == 0) return out;
+
+    DeviceBuffers buffers;
+    const TraceSceneView deviceScene = uploadTraceScene(buffers, scene);
+    const BvhView deviceBvh = uploadBvh(buffers, bvh);
+    const MipView deviceMips = mips ? uploadMips(buffers, *mips) : MipView{};
+    const DeviceArray<uint32_t> begin(receivers.begin);
+    const DeviceArray<SurfaceSample> samples(receivers.samples);
+    DeviceArray<ElementLighting> results(elements);
+
+    const dim3 threads(16, 8);
+    shadeReceiversKernel<<<imageBlocks(receivers.width, receivers.height, threads), threads>>>(
+        deviceScene, deviceBvh, deviceMips, mips ? 1 : 0, coneSet(cone.coneCount), cone, direct, begin.get(),
+        samples.get(), receivers.width, receivers.height, results.get());
+    finishKernels("receiver shading kernel");
+
+    const std::vector<ElementLighting> host = results.toHost();
+    for (size_t e = 0; e < elements; ++e) {
+        const int x = static_cast<int>(e % static_cast<size_t>(receivers.width));
+        const int y = static_cast<int>(e / static_cast<size_t>(receivers.width));
+        out.direct.setRgb(x, y, host[e].direct);
+        out.indirect.setRgb(x, y, host[e].indirect);
+        out.directRadiance.setRgb(x, y, host[e].directRadiance);
+        out.indirectRadiance.setRgb(x, y, host[e].indirectRadiance);
+    }
+    return out;
+}
+
+}  // namespace vl::cuda
