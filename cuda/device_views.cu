@@ -1,6 +1,6 @@
 #include "cuda/device_views.cuh"
 
-#include <algorithm>
+#include "cuda/view_extents.h"
 
 namespace vl::cuda {
 
@@ -15,14 +15,7 @@ TraceSceneView uploadTraceScene(DeviceBuffers& owner, const TraceSceneView& host
     d.materialIds = upload(owner, host.materialIds, host.triangleCount);
     d.materials = upload(owner, host.materials, host.materialCount);
     d.textures = upload(owner, host.textures, host.textureCount);
-    // The texel array's length is not in the view: the end of the last texture.
-    size_t texelFloats = 0;
-    for (uint32_t t = 0; t < host.textureCount; ++t) {
-        const TraceTexture& texture = host.textures[t];
-        texelFloats = std::max(texelFloats, static_cast<size_t>(texture.offset) +
-                                                4 * static_cast<size_t>(texture.width) * static_cast<size_t>(texture.height));
-    }
-    d.texels = upload(owner, host.texels, texelFloats);
+    d.texels = upload(owner, host.texels, texelFloatCount(host));
     d.lights = upload(owner, host.lights, host.lightCount);
     d.emitters = upload(owner, host.emitters, host.emitterCount);
     d.emitterCdf = upload(owner, host.emitterCdf, host.emitterCount);
@@ -32,11 +25,7 @@ TraceSceneView uploadTraceScene(DeviceBuffers& owner, const TraceSceneView& host
 
 BvhView uploadBvh(DeviceBuffers& owner, const BvhView& host) {
     BvhView d = host;
-    // Leaf slots are not counted in the view: the end of the last leaf.
-    size_t slots = 0;
-    for (uint32_t i = 0; i < host.nodeCount; ++i)
-        if (host.nodes[i].count > 0)
-            slots = std::max(slots, static_cast<size_t>(host.nodes[i].firstOrChild) + host.nodes[i].count);
+    const size_t slots = leafSlotCount(host);
     d.nodes = upload(owner, host.nodes, host.nodeCount);
     d.vertices = upload(owner, host.vertices, 3 * slots);
     d.triangleIds = upload(owner, host.triangleIds, slots);
@@ -49,10 +38,8 @@ MipView uploadMips(DeviceBuffers& owner, const MipView& host) {
     MipView d = host;
     for (int k = 0; k < host.levelCount; ++k) {
         const MipLevelView& level = host.levels[k];
-        // One texel run per active voxel of the level's index grid.
-        const size_t voxels = level.index ? static_cast<size_t>(level.index->activeVoxelCount()) : 0;
         d.levels[k].index = uploadGrid(owner, level.index);
-        d.levels[k].texels = upload(owner, level.texels, voxels * static_cast<size_t>(level.facesPerVoxel));
+        d.levels[k].texels = upload(owner, level.texels, mipTexelCount(level));
     }
     return d;
 }
@@ -69,10 +56,7 @@ lighting::LightingView uploadLighting(DeviceBuffers& owner, const lighting::Ligh
     d.solid = upload(owner, host.solid, n);
     d.lights = upload(owner, host.lights, host.lightCount);
     d.emitters = upload(owner, host.emitters, host.emitterCount);
-    size_t samples = 0;
-    for (uint32_t e = 0; e < host.emitterCount; ++e)
-        samples = std::max(samples, static_cast<size_t>(host.emitters[e].firstSample) + host.emitters[e].sampleCount);
-    d.emitterSamples = upload(owner, host.emitterSamples, samples);
+    d.emitterSamples = upload(owner, host.emitterSamples, emitterSampleCount(host));
     return d;
 }
 
