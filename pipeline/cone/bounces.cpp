@@ -21,9 +21,26 @@ void checkChannels(const VoxelScene& voxels) {
                         " values for " + std::to_string(n) + " voxels");
     };
     check(voxels.radiance.size(), "radiance");
+    if (!voxels.faceRadiance.empty()) check(voxels.faceRadiance.size(), "faceRadiance");
     check(voxels.albedo.size(), "albedo");
     check(voxels.normal.size(), "normal");
     check(voxels.axisWeights.size(), "axisWeights");
+}
+
+// The lit faces: faceRadiance, or `radiance` on every face with a surface.
+std::vector<FaceRadiance> litFaces(const VoxelScene& voxels) {
+    if (!voxels.faceRadiance.empty()) return voxels.faceRadiance;
+    std::vector<FaceRadiance> faces(voxels.size());
+    for (size_t i = 0; i < voxels.size(); ++i)
+        for (size_t f = 0; f < 6; ++f) faces[i][f] = voxels.axisWeights[i][f] > 0.0f ? voxels.radiance[i] : vec3(0.0f);
+    return faces;
+}
+
+std::vector<vec3> isotropic(const VoxelScene& voxels, const std::vector<FaceRadiance>& faces) {
+    std::vector<vec3> radiance(faces.size());
+    for (size_t i = 0; i < faces.size(); ++i)
+        radiance[i] = faceWeightedMean(faces[i].data(), voxels.axisWeights[i].data());
+    return radiance;
 }
 
 }  // namespace
@@ -37,20 +54,24 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
     if (bounces == 0 || voxels.size() == 0) return;
 
     const ConeSet& set = coneSet(settings.coneCount);
-    const std::vector<vec3> lit = voxels.radiance;
-    std::vector<vec3> next(voxels.size());
+    const std::vector<FaceRadiance> lit = litFaces(voxels);
+    std::vector<FaceRadiance> current = lit;
+    std::vector<FaceRadiance> next(voxels.size());
     for (int b = 0; b < bounces; ++b) {
-        const RadianceMips mips = buildRadianceMips(voxels, voxels.radiance);
+        const RadianceMips mips = buildRadianceMips(voxels, isotropic(voxels, current), current);
         const MipView view = mips.view();
         tbb::parallel_for(tbb::blocked_range<size_t>(0, voxels.size()), [&](const tbb::blocked_range<size_t>& range) {
             for (size_t i = range.begin(); i != range.end(); ++i) {
-                const vec3 e = voxelIrradiance(view, voxels.centre(i), voxels.normal[i],
-                                               voxels.axisWeights[i].data(), set, settings);
-                next[i] = lit[i] + voxels.albedo[i] * kInvPi * e;
+                vec3 e[6];
+                faceIrradiance(view, voxels.centre(i), voxels.normal[i], voxels.axisWeights[i].data(), set, settings, e);
+                const vec3 reflectance = voxels.albedo[i] * kInvPi;
+                for (size_t f = 0; f < 6; ++f) next[i][f] = lit[i][f] + reflectance * e[f];
             }
         });
-        voxels.radiance.swap(next);
+        current.swap(next);
     }
+    voxels.radiance = isotropic(voxels, current);
+    voxels.faceRadiance = std::move(current);
 }
 
 }  // namespace vl

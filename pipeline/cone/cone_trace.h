@@ -40,31 +40,50 @@ struct ConeResult {
     float occlusion = 0.0f;      // A in [0, 1]
 };
 
-// Trilinear sample of one level at index-space position x (voxel centres at integers),
-// for travel direction `dir`: levels ≥ 1 blend their face texels by dir² (the three faces
-// dir points along), level 0 is isotropic. Absent voxels are zero. `density` is the
-// trilinear optical depth σ, not σ of the trilinear α: σ is what adds up along a ray, and
-// interpolating α instead turns a solid wall one voxel thick into a tent whose transmittance
-// is e^−2 ≈ 14 % at every level (light leaks through every thin wall).
+// Trilinear sample of one level at index-space position x (voxel centres at integers).
+// Each voxel read shows the texels of the faces that look back at the viewer, blended by the
+// squared components of the direction u from the viewer to that voxel (the three faces u
+// points along; radiance_mips.h stores the texel seen travelling along +X, −X, … ). The
+// viewer is `viewpoint` (index space at this level; the cone's apex) when given, else far
+// away against `dir` (u = dir for every voxel). Why the apex and not the travel direction:
+// the trilinear footprint reaches voxels beside and behind the sample point, and a wall the
+// cone runs along or away from is seen from the apex's side of it, never from the far side
+// (by travel direction, a cone leaving the dark side of a wall lit on its other side read
+// the lit face of the wall behind it). Absent voxels are zero. The sample's colour is
+// radiance / coverage: the surfaces it shows, weighted by how much of each texel is surface;
+// a sample showing only faces without surface is dark (the back of a one-sided surface).
+// `density` is the trilinear optical depth σ, not σ of the trilinear α: σ is what adds up
+// along a ray, and interpolating α instead turns a solid wall one voxel thick into a tent
+// whose transmittance is e^−2 ≈ 14 % at every level (light leaks through every thin wall).
 struct MipSample {
-    vec3 radiance = vec3(0.0f);  // α-premultiplied
+    vec3 radiance = vec3(0.0f);  // coverage-premultiplied
     float alpha = 0.0f;
     float density = 0.0f;
+    float coverage = 0.0f;
+
+    VL_HOSTDEV vec3 colour() const { return coverage > 0.0f ? radiance / coverage : vec3(0.0f); }
 };
 
-VL_HOSTDEV inline MipSample sampleMipLevel(const MipLevelView& level, const vec3& x, const vec3& dir) {
+// The three travel texels a viewer looking along u sees and their weights (Σ = 1; an axis u
+// has no part along gets weight 0).
+VL_HOSTDEV inline void viewFaces(const vec3& u, int (&faces)[3], float (&weights)[3]) {
+    float sum = 0.0f;
+    for (int a = 0; a < 3; ++a) {
+        faces[a] = 2 * a + (u[a] < 0.0f ? 1 : 0);
+        weights[a] = u[a] * u[a];
+        sum += weights[a];
+    }
+    for (int a = 0; a < 3; ++a) weights[a] = sum > 0.0f ? weights[a] / sum : 1.0f / 3.0f;
+}
+
+VL_HOSTDEV inline MipSample sampleMipLevel(const MipLevelView& level, const vec3& x, const vec3& dir,
+                                           const vec3* viewpoint = nullptr) {
     constexpr float kIndexLimit = 1.0e9f;  // keeps the int conversion defined far outside
     MipSample sum;
     if (!(glm::abs(x.x) < kIndexLimit && glm::abs(x.y) < kIndexLimit && glm::abs(x.z) < kIndexLimit)) return sum;
-    int faces[3];
-    float faceWeights[3];
-    float weightSum = 0.0f;
-    for (int a = 0; a < 3; ++a) {
-        faces[a] = 2 * a + (dir[a] < 0.0f ? 1 : 0);
-        faceWeights[a] = dir[a] * dir[a];
-        weightSum += faceWeights[a];
-    }
-    for (int a = 0; a < 3; ++a) faceWeights[a] = weightSum > 0.0f ? faceWeights[a] / weightSum : 1.0f / 3.0f;
+    int travelFaces[3];
+    float travelWeights[3];
+    viewFaces(dir, travelFaces, travelWeights);
 
     const vec3 base = glm::floor(x);
     const vec3 f = x - base;
@@ -75,15 +94,23 @@ VL_HOSTDEV inline MipSample sampleMipLevel(const MipLevelView& level, const vec3
             for (int dx = 0; dx < 2; ++dx) {
                 const float w = (dx ? f.x : 1.0f - f.x) * (dy ? f.y : 1.0f - f.y) * (dz ? f.z : 1.0f - f.z);
                 if (w == 0.0f) continue;
-                const int32_t index = accessor.getValue(nanovdb::Coord(i0.x + dx, i0.y + dy, i0.z + dz));
+                const ivec3 corner(i0.x + dx, i0.y + dy, i0.z + dz);
+                const int32_t index = accessor.getValue(nanovdb::Coord(corner.x, corner.y, corner.z));
                 if (index < 0) continue;
+                int faces[3] = {travelFaces[0], travelFaces[1], travelFaces[2]};
+                float faceWeights[3] = {travelWeights[0], travelWeights[1], travelWeights[2]};
+                if (viewpoint) {
+                    const vec3 u = vec3(corner) - *viewpoint;
+                    if (glm::dot(u, u) > 0.0f) viewFaces(u, faces, faceWeights);
+                }
                 const MipTexel* texels = level.texels + size_t(index) * size_t(level.facesPerVoxel);
-                for (int a = 0; a < (level.facesPerVoxel == 1 ? 1 : 3); ++a) {
-                    const MipTexel& t = texels[level.facesPerVoxel == 1 ? 0 : faces[a]];
-                    const float tw = level.facesPerVoxel == 1 ? w : w * faceWeights[a];
+                for (int a = 0; a < 3; ++a) {
+                    const MipTexel& t = texels[faces[a]];
+                    const float tw = w * faceWeights[a];
                     sum.radiance += tw * t.radiance;
                     sum.alpha += tw * t.alpha;
                     sum.density += tw * t.density;
+                    sum.coverage += tw * t.coverage;
                 }
             }
     return sum;
@@ -91,12 +118,14 @@ VL_HOSTDEV inline MipSample sampleMipLevel(const MipLevelView& level, const vec3
 
 // What one segment of `stepLength` (metres) around world point p contributes at fractional
 // level λ (clamped to the chain), travelling along dir: (c', a') with
-//   a' = 1 − exp(−σ · stepLength / (h·2^l)),  c' = (c / α) · a'
-// at each of the two nearest levels l, then linear in λ between them. For a single voxel
-// sampled at its centre, 1 − exp(−σ·s/v) = 1 − (1 − α)^(s/v): the step-length correction.
+//   a' = 1 − exp(−σ · stepLength / (h·2^l)),  c' = (c / coverage) · a'
+// (c / coverage = c / α where every texel is all surface; MipSample::colour) at each of the
+// two nearest levels l, then linear in λ between them. For a single voxel sampled at its
+// centre, 1 − exp(−σ·s/v) = 1 − (1 − α)^(s/v): the step-length correction.
 // Correcting each level before blending keeps a uniform medium exact at any λ.
+// `apex`, when given, is the viewer every voxel is seen from (sampleMipLevel).
 VL_HOSTDEV inline vec4 coneSegment(const MipView& mips, const vec3& p, const vec3& dir, float level,
-                                   float stepLength) {
+                                   float stepLength, const vec3* apex = nullptr) {
     if (mips.levelCount <= 0) return vec4(0.0f);
     level = glm::clamp(level, 0.0f, float(mips.levelCount - 1));
     const int lower = static_cast<int>(level);
@@ -105,10 +134,12 @@ VL_HOSTDEV inline vec4 coneSegment(const MipView& mips, const vec3& p, const vec
     for (int l = lower; l <= lower + 1 && l < mips.levelCount; ++l) {
         const float weight = l == lower ? 1.0f - blend : blend;
         if (weight <= 0.0f) continue;
-        const MipSample s = sampleMipLevel(mips.levels[l], mipIndexPosition(p, mips.voxelSize, l), dir);
+        const vec3 viewpoint = apex ? mipIndexPosition(*apex, mips.voxelSize, l) : vec3(0.0f);
+        const MipSample s =
+            sampleMipLevel(mips.levels[l], mipIndexPosition(p, mips.voxelSize, l), dir, apex ? &viewpoint : nullptr);
         if (!(s.alpha > 0.0f)) continue;
         const float opacity = -expm1f(-s.density * stepLength / ldexpf(mips.voxelSize, l));
-        result += weight * vec4(s.radiance * (opacity / s.alpha), opacity);
+        result += weight * vec4(s.colour() * opacity, opacity);
     }
     return result;
 }
@@ -182,7 +213,7 @@ VL_HOSTDEV inline ConeResult traceCone(const MipView& mips, const vec3& apex, co
         // Past the bounds, coarse samples still read the blurred border voxels: their centres
         // lie up to half a voxel outside and trilinear weights reach one voxel further.
         if (tMid > tOut + 1.5f * ldexpf(h, static_cast<int>(glm::ceil(level)))) break;
-        const vec4 segment = coneSegment(mips, apex + tMid * dir, dir, level, step);
+        const vec4 segment = coneSegment(mips, apex + tMid * dir, dir, level, step, &apex);
         const float remaining = 1.0f - result.occlusion;
         result.radiance += remaining * vec3(segment);
         result.occlusion = glm::min(1.0f, result.occlusion + remaining * segment.w);

@@ -33,7 +33,7 @@ std::string voxelName(const VoxelScene& voxels, size_t i) {
            std::to_string(c.z) + ")";
 }
 
-void checkInputs(const VoxelScene& voxels, const std::vector<vec3>& radiance) {
+void checkInputs(const VoxelScene& voxels, const std::vector<vec3>& radiance, const std::vector<FaceRadiance>* faces) {
     const std::string where = "buildRadianceMips(" + voxels.sourceScene + "): ";
     const size_t n = voxels.size();
     if (radiance.size() != n)
@@ -41,39 +41,61 @@ void checkInputs(const VoxelScene& voxels, const std::vector<vec3>& radiance) {
                     std::to_string(n) + " voxels (run the lighting stage first)");
     if (voxels.opacity.size() != n || voxels.solid.size() != n)
         throw Error(where + "opacity or solid does not match the " + std::to_string(n) + " voxels");
+    if (faces && (faces->size() != n || voxels.axisWeights.size() != n))
+        throw Error(where + "face radiance or axis weights do not match the " + std::to_string(n) + " voxels");
     if (n > 0 && !(voxels.voxelSize > 0.0))
         throw Error(where + "voxel size " + std::to_string(voxels.voxelSize) + " is not positive");
+    const auto valid = [](const vec3& r) { return isFinite(r) && !glm::any(glm::lessThan(r, vec3(0.0f))); };
     for (size_t i = 0; i < n; ++i) {
         const ivec3& c = voxels.coords[i];
         if (glm::any(glm::greaterThanEqual(glm::abs(c), ivec3(kCoordLimit))))
             throw Error(where + voxelName(voxels, i) + " lies beyond ±2^20 voxels");
-        const vec3& r = radiance[i];
-        if (!isFinite(r) || glm::any(glm::lessThan(r, vec3(0.0f))))
-            throw InputError(where + "radiance of " + voxelName(voxels, i) + " is negative, NaN or Inf");
+        bool ok = valid(radiance[i]);
+        if (faces)
+            for (const vec3& r : (*faces)[i]) ok = ok && valid(r);
+        if (!ok) throw InputError(where + "radiance of " + voxelName(voxels, i) + " is negative, NaN or Inf");
         const float a = voxels.opacity[i];
         if (!voxels.solid[i] && !(a >= 0.0f && a <= 1.0f))
             throw InputError(where + "opacity of " + voxelName(voxels, i) + " is outside [0, 1]");
     }
 }
 
-MipTexel makeTexel(const vec3& premultiplied, float alpha) {
+MipTexel makeTexel(const vec3& premultiplied, float alpha, float coverage) {
     MipTexel texel;
     texel.radiance = premultiplied;
     texel.alpha = alpha;
     texel.density = opticalDepth(alpha);
+    texel.coverage = coverage;
     return texel;
 }
 
-MipLevel levelZero(const VoxelScene& voxels, const std::vector<vec3>& radiance) {
+// The face a cone travelling along `travel` sees: the one facing back at it.
+constexpr int facingFace(int travel) { return travel ^ 1; }
+
+MipLevel levelZero(const VoxelScene& voxels, const std::vector<vec3>& radiance, const std::vector<FaceRadiance>* faces) {
     MipLevel level;
     level.voxelSize = voxels.voxelSize;
     level.coords = voxels.coords;
+    level.facesPerVoxel = kFaceCount;
     level.values.resize(voxels.size());
-    level.texels.resize(voxels.size());
+    level.texels.resize(voxels.size() * kFaceCount);
     for (size_t i = 0; i < voxels.size(); ++i) {
         const float alpha = voxels.solid[i] ? 1.0f : voxels.opacity[i];
         level.values[i] = vec4(alpha * radiance[i], alpha);
-        level.texels[i] = makeTexel(alpha * radiance[i], alpha);
+        MipTexel* texels = &level.texels[i * kFaceCount];
+        if (!faces) {
+            for (int travel = 0; travel < kFaceCount; ++travel) texels[travel] = makeTexel(alpha * radiance[i], alpha, alpha);
+            continue;
+        }
+        const AxisWeights& w = voxels.axisWeights[i];
+        float largest = 0.0f;
+        for (float weight : w) largest = std::max(largest, std::isfinite(weight) ? weight : 0.0f);
+        for (int travel = 0; travel < kFaceCount; ++travel) {
+            const int face = facingFace(travel);
+            const float weight = w[size_t(face)];
+            const float share = largest > 0.0f && weight > 0.0f && std::isfinite(weight) ? weight / largest : 0.0f;
+            texels[travel] = makeTexel(share * alpha * (*faces)[i][size_t(face)], alpha, share * alpha);
+        }
     }
     return level;
 }
@@ -96,11 +118,10 @@ void makeParent(const MipLevel& children, const int (&slots)[8], vec4& value, Mi
             offset[v] = dv;
             const int slot = slots[offset.x + 2 * offset.y + 4 * offset.z];
             if (slot < 0) return MipTexel{};
-            return children.texels[size_t(slot) * size_t(children.facesPerVoxel) +
-                                   size_t(children.facesPerVoxel == 1 ? 0 : face)];
+            return children.texels[size_t(slot) * size_t(children.facesPerVoxel) + size_t(face)];
         };
         vec3 radiance(0.0f);
-        float alpha = 0.0f;
+        float alpha = 0.0f, coverage = 0.0f;
         for (int du = 0; du < 2; ++du)
             for (int dv = 0; dv < 2; ++dv) {
                 // Travelling along +axis the lower child is met first.
@@ -108,8 +129,9 @@ void makeParent(const MipLevel& children, const int (&slots)[8], vec4& value, Mi
                 const MipTexel back = childTexel(towardsNegative ? 0 : 1, du, dv);
                 radiance += front.radiance + (1.0f - front.alpha) * back.radiance;
                 alpha += front.alpha + (1.0f - front.alpha) * back.alpha;
+                coverage += front.coverage + (1.0f - front.alpha) * back.coverage;
             }
-        texels[face] = makeTexel(0.25f * radiance, 0.25f * alpha);
+        texels[face] = makeTexel(0.25f * radiance, 0.25f * alpha, 0.25f * coverage);
     }
 }
 
@@ -202,10 +224,25 @@ size_t RadianceMips::memoryBytes() const {
     return bytes;
 }
 
-RadianceMips buildRadianceMips(const VoxelScene& voxels) { return buildRadianceMips(voxels, voxels.radiance); }
+// The one builder behind the overloads (a friend of RadianceMips); faces null: isotropic.
+RadianceMips buildMips(const VoxelScene& voxels, const std::vector<vec3>& radiance, const std::vector<FaceRadiance>* faces);
+
+RadianceMips buildRadianceMips(const VoxelScene& voxels) {
+    if (voxels.faceRadiance.empty()) return buildMips(voxels, voxels.radiance, nullptr);
+    return buildMips(voxels, voxels.radiance, &voxels.faceRadiance);
+}
 
 RadianceMips buildRadianceMips(const VoxelScene& voxels, const std::vector<vec3>& radiance) {
-    checkInputs(voxels, radiance);
+    return buildMips(voxels, radiance, nullptr);
+}
+
+RadianceMips buildRadianceMips(const VoxelScene& voxels, const std::vector<vec3>& radiance,
+                               const std::vector<FaceRadiance>& faceRadiance) {
+    return buildMips(voxels, radiance, &faceRadiance);
+}
+
+RadianceMips buildMips(const VoxelScene& voxels, const std::vector<vec3>& radiance, const std::vector<FaceRadiance>* faces) {
+    checkInputs(voxels, radiance, faces);
     RadianceMips mips;
     mips.voxelSize_ = voxels.voxelSize;
     if (voxels.size() == 0) return mips;
@@ -219,7 +256,7 @@ RadianceMips buildRadianceMips(const VoxelScene& voxels, const std::vector<vec3>
     mips.boundsMin_ = (vec3(lo) - vec3(0.5f)) * h;
     mips.boundsMax_ = (vec3(hi) + vec3(0.5f)) * h;
 
-    mips.levels_.push_back(levelZero(voxels, radiance));
+    mips.levels_.push_back(levelZero(voxels, radiance, faces));
     while (!isSmallEnough(mips.levels_.back()) && mips.levelCount() < MipView::kMaxLevels) {
         const int k = mips.levelCount();
         mips.levels_.push_back(parentLevel(mips.levels_.back(), voxels.voxelSize, k));

@@ -1,21 +1,32 @@
-// The radiance mip chain that cones sample: takes a lit VoxelScene (radiance, opacity,
-// solid), gives per level a sparse NanoVDB index grid (coord → texel index, −1 outside) over
-// plain texel arrays, and a plain view of them for the kernels in cone_trace.h.
+// The radiance mip chain that cones sample: takes a lit VoxelScene (faceRadiance, or
+// radiance where there is none; opacity, solid, axis weights), gives per level a sparse
+// NanoVDB index grid (coord → texel index, −1 outside) over plain texel arrays, and a plain
+// view of them for the kernels in cone_trace.h.
 //
-// Level 0 is the voxels: α = opacity (1 for a solid voxel), value = (α·radiance, α).
-// Level k voxel I (size 2^k·h) has the 8 children 2I + {0,1}³ at level k−1 and is active
-// when any child is. It keeps two things:
-//  - `values`: the plain average of its children's (α·radiance, α), empty children zero,
-//    so Σ value·volume is the same at every level. This is the isotropic mip written to
-//    grids.vdb.
-//  - `texels`: what cones sample, one per direction of travel (+X, −X, +Y, −Y, +Z, −Z):
-//    the children composited front to back in pairs along that axis (c = c_f + (1−α_f)c_b,
-//    α = α_f + (1−α_f)α_b), then the 4 pairs averaged (Crassin et al. 2011, anisotropic
-//    voxels). Why not the plain average: a wall one voxel thick averages to α = 2^−k at
-//    level k, so every cone wider than a voxel sees through walls (a closed box of radiance
-//    L gathers a few percent of π·L). Composited along the travel axis the wall keeps α = 1
-//    for cones crossing it and coverage for cones running along it. A uniform medium of
-//    opacity α₀ gets α_k = 1 − (1 − α₀)^(2^k): Beer–Lambert at every level.
+// Every level keeps per voxel one texel per direction of travel (+X, −X, +Y, −Y, +Z, −Z):
+// (α-premultiplied radiance, α, coverage). Coverage is the part of α that shows a surface:
+// a cone's colour is radiance / coverage (cone_trace.h), its opacity comes from α.
+//  - Level 0 is the voxels: α = opacity (1 for a solid voxel). The texel for travel d shows
+//    the face looking back at the cone (travel +X: face −X), its radiance from faceRadiance,
+//    with coverage c_f·α, c_f = w_f / max_g w_g (the face's share of the voxel's largest
+//    axis weight). A face without surface (w_f = 0) shows nothing and covers nothing, yet the
+//    voxel keeps its α: looking at a floor at 45°, the blend of its top face (coverage 1) and
+//    its empty side face (coverage 0) shows the top's radiance, not half of it, and a one-
+//    sided or double-sided wall lit on one side shows nothing to the dark side (the isotropic
+//    radiance of one voxel holding both sides leaked through every thin wall). Without
+//    faceRadiance every face shows `radiance` with coverage α (isotropic, as before).
+//  - Level k voxel I (size 2^k·h) has the 8 children 2I + {0,1}³ at level k−1 and is active
+//    when any child is. Its texel for travel along an axis composites the children front to
+//    back in pairs along that axis (c = c_f + (1−α_f)c_b, α = α_f + (1−α_f)α_b, coverage
+//    alike), then averages the 4 pairs (Crassin et al. 2011, anisotropic voxels). Why not
+//    the plain average: a wall one voxel thick averages to α = 2^−k at level k, so every
+//    cone wider than a voxel sees through walls (a closed box of radiance L gathers a few
+//    percent of π·L). Composited along the travel axis the wall keeps α = 1 for cones
+//    crossing it and coverage for cones running along it. A uniform medium of opacity α₀
+//    gets α_k = 1 − (1 − α₀)^(2^k): Beer–Lambert at every level.
+//  - `values`: the plain average of the children's isotropic (α·radiance, α) (level 0: the
+//    voxels' `radiance`), empty children zero, so Σ value·volume is the same at every level.
+//    This is the isotropic mip written to grids.vdb.
 // Each texel also stores its optical depth σ = −ln(1 − min(α, 1 − 10⁻³)) per voxel length;
 // cone_trace.h interpolates σ rather than α for opacity (see there).
 // Levels are built until one has at most 8 voxels or spans at most 2 voxels on every axis
@@ -27,8 +38,8 @@
 // and mipIndexPosition() applies it, so a level-k parent's centre is exactly the corner
 // shared by its 8 children at level k−1.
 //
-// The radiance channel is the light voxels reflect (lighting stage); emission is not in it
-// and never enters the mips, so cones never count an emitter that the receiver's exact
+// The radiance channels are the light voxels reflect (lighting stage); emission is not in
+// them and never enters the mips, so cones never count an emitter that the receiver's exact
 // direct term already holds.
 #pragma once
 
@@ -50,22 +61,23 @@ using MipIndexGrid = nanovdb::NanoGrid<int32_t>;
 constexpr float kMaxMipOpacity = 0.999f;
 
 struct MipTexel {
-    vec3 radiance = vec3(0.0f);  // α-premultiplied
+    vec3 radiance = vec3(0.0f);  // α-premultiplied (coverage-premultiplied at level 0)
     float alpha = 0.0f;
     float density = 0.0f;        // σ = −ln(1 − min(α, kMaxMipOpacity))
+    float coverage = 0.0f;       // the part of α that shows a surface; colour = radiance / coverage
 };
 
 VL_HOSTDEV inline float opticalDepth(float alpha) {
     return -logf(1.0f - glm::clamp(alpha, 0.0f, kMaxMipOpacity));
 }
 
-// Directions of travel of the texels of levels ≥ 1, in this order.
+// Directions of travel of the texels, in this order.
 enum MipFace { kFacePosX, kFaceNegX, kFacePosY, kFaceNegY, kFacePosZ, kFaceNegZ, kFaceCount };
 
 struct MipLevelView {
     const MipIndexGrid* index = nullptr;
     const MipTexel* texels = nullptr;  // texel of voxel i, face f: texels[i·facesPerVoxel + f]
-    int facesPerVoxel = 1;             // 1 at level 0 (isotropic), 6 above
+    int facesPerVoxel = 6;             // one texel per direction of travel at every level
 };
 
 // What a kernel needs: per-level grids and texel arrays (host or device memory, as the
@@ -98,8 +110,8 @@ struct MipLevel {
     vec3 centreOffset = vec3(0.0f);  // world position of voxel (0,0,0)'s centre: (2^k − 1)/2·h
     std::vector<ivec3> coords;       // sorted by (x, y, z)
     std::vector<vec4> values;        // isotropic (α·radiance, α), parallel to coords
-    std::vector<MipTexel> texels;    // 1 (level 0) or 6 (above) per voxel
-    int facesPerVoxel = 1;
+    std::vector<MipTexel> texels;    // facesPerVoxel per voxel
+    int facesPerVoxel = 6;
 };
 
 class RadianceMips {
@@ -112,21 +124,27 @@ public:
     size_t memoryBytes() const;  // index grids and texel arrays of all levels
 
 private:
-    friend RadianceMips buildRadianceMips(const VoxelScene&, const std::vector<vec3>&);
+    friend RadianceMips buildMips(const VoxelScene&, const std::vector<vec3>&, const std::vector<FaceRadiance>*);
     double voxelSize_ = 0.0;
     vec3 boundsMin_ = vec3(0.0f), boundsMax_ = vec3(0.0f);
     std::vector<MipLevel> levels_;
     std::vector<nanovdb::GridHandle<nanovdb::HostBuffer>> grids_;
 };
 
-// Mips of voxels.radiance. Error when radiance, opacity or solid do not match the voxel
+// Mips of voxels.faceRadiance (with voxels.radiance as the isotropic values), or of
+// voxels.radiance alone, isotropic, when faceRadiance is empty. Error when radiance, opacity
+// or solid (or faceRadiance, when given, and axis weights with it) do not match the voxel
 // count (radiance is missing before the lighting stage has run), the voxel size is not
 // positive, or a coordinate is beyond ±2^20; InputError when a radiance is negative, NaN or
 // Inf or an opacity is outside [0, 1] (naming the voxel). An empty scene gives zero levels;
 // cones through it gather nothing.
 RadianceMips buildRadianceMips(const VoxelScene& voxels);
-// The same topology with another radiance channel (parallel to voxels.coords).
+// The same topology with another isotropic radiance channel (parallel to voxels.coords).
 RadianceMips buildRadianceMips(const VoxelScene& voxels, const std::vector<vec3>& radiance);
+// The same topology with other face radiances (parallel to voxels.coords); `radiance` their
+// isotropic mean (faceWeightedMean), for `values`.
+RadianceMips buildRadianceMips(const VoxelScene& voxels, const std::vector<vec3>& radiance,
+                               const std::vector<FaceRadiance>& faceRadiance);
 
 // Grids for grids.vdb: per level k, `radiance_mip<k>` (Vec3, the isotropic α-premultiplied
 // radiance) and `opacity_mip<k>` (float α), voxel size 2^k·h. ExtraGrid has no

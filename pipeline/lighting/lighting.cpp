@@ -250,6 +250,7 @@ LightingStats lightVoxels(const Scene& scene, VoxelScene& voxels, const Lighting
     stats.emitterTriangles = emitters.triangles.size();
     stats.emitterSamples = emitters.samples.size();
     voxels.radiance.assign(n, vec3(0.0f));
+    voxels.faceRadiance.assign(n, FaceRadiance{});
     voxels.occlusion.assign(n, 0.0f);
     if (n == 0) return stats;
 
@@ -279,6 +280,11 @@ LightingStats lightVoxels(const Scene& scene, VoxelScene& voxels, const Lighting
     view.visibility = settings.visibility ? 1 : 0;
     const bool hierarchical = settings.traversal == VisibilityTraversal::Hdda;
 
+    const auto store = [&](size_t i, const lighting::VoxelLighting& result) {
+        voxels.radiance[i] = result.radiance;
+        for (int f = 0; f < 6; ++f) voxels.faceRadiance[i][size_t(f)] = result.faceRadiance[f];
+        voxels.occlusion[i] = result.occlusion;
+    };
     std::atomic<uint64_t> evaluations{0};
     std::atomic<uint64_t> steps{0};
     auto runnerPass = [&] {
@@ -286,8 +292,7 @@ LightingStats lightVoxels(const Scene& scene, VoxelScene& voxels, const Lighting
         lighting::KernelStats local;
         runner(view, static_cast<uint32_t>(n), hierarchical, results.data(), local);
         for (size_t i = 0; i < n; ++i) {
-            voxels.radiance[i] = results[i].radiance;
-            voxels.occlusion[i] = results[i].occlusion;
+            store(i, results[i]);
         }
         evaluations += local.evaluations;
         steps += local.steps;
@@ -302,8 +307,7 @@ LightingStats lightVoxels(const Scene& scene, VoxelScene& voxels, const Lighting
                 const lighting::VoxelLighting result =
                     hierarchical ? lighting::shadeVoxel<true>(view, accessor, index, local)
                                  : lighting::shadeVoxel<false>(view, accessor, index, local);
-                voxels.radiance[i] = result.radiance;
-                voxels.occlusion[i] = result.occlusion;
+                store(i, result);
             }
             evaluations += local.evaluations;
             steps += local.steps;

@@ -1,8 +1,11 @@
 // Voxel direct lighting (paper §3.3): takes a VoxelScene (albedo, normal, axis weights,
 // opacity, solid) and the Scene's punctual lights and emissive triangles; gives
-// VoxelScene::radiance = albedo/π × Σ_lights E·weight·(1 − V), the diffuse light each voxel
-// reflects, and VoxelScene::occlusion = the mean visibility loss V over the lights that
-// reach the voxel. Emission stays in its own channel (the bake counts it once).
+// VoxelScene::faceRadiance, per voxel face the diffuse light the surface side facing that
+// way reflects, albedo/π × Σ_lights E·weight·(1 − V) with one visibility ray per light and
+// lit side (voxel_scene.h voxelSides: the front of a surface, the back of a double-sided
+// one, each face on its own where normals cancel); VoxelScene::radiance = the faces' mean
+// (faceWeightedMean); and VoxelScene::occlusion = the mean visibility loss V over the lights
+// that reach the voxel. Emission stays in its own channel (the bake counts it once).
 //
 // Visibility follows ERRATA eq. (17); the kernels are in lighting/lighting_kernels.h, written
 // once for the TBB pass here and a later CUDA launcher.
@@ -20,11 +23,13 @@ namespace vl {
 
 class Progress;
 
-// How the normal of a voxel weighs incoming light (DESIGN.md "Normal-weighted attenuation").
+// How a surface side of a voxel (normal N_s, its faces F_s) weighs incoming light
+// (DESIGN.md "Normal-weighted attenuation"; lighting_kernels.h sideWeight). Where normals
+// cancel each face is a side with N_s = its direction, and all three are max(N_s·L, 0).
 enum class NormalWeighting {
-    Lambert,   // max(N·L, 0) with the voxel's mean normal; 0 where normals cancel
-    Villegas,  // W = N∘N, D_a = max(sign(N_a)·L_a, 0), cos = Σ_a W_a·D_a
-    SixAxis,   // Σ_faces w_face·max(dir_face·L, 0) / Σ_axes max(w_+a, w_−a) over the six axis weights
+    Lambert,   // max(N_s·L, 0): exact for a flat surface of any orientation
+    Villegas,  // W = N_s∘N_s, D_a = max(sign(N_s,a)·L_a, 0), cos = Σ_a W_a·D_a
+    SixAxis,   // Σ_{f∈F_s} w_f·max(dir_f·L, 0) / Σ_{f∈F_s} w_f: the side's own axis faces
 };
 
 // How visibility rays walk the grid. Both visit the same voxels in the same order and give
@@ -68,7 +73,7 @@ const char* toString(NormalWeighting mode);
 // "lambert", "villegas", "six-axis"; SettingsError for anything else.
 NormalWeighting parseNormalWeighting(const std::string& name);
 
-// Fills voxels.radiance and voxels.occlusion (overwriting them). Throws SettingsError for
+// Fills voxels.faceRadiance, voxels.radiance and voxels.occlusion (overwriting them). Throws SettingsError for
 // settings out of range (naming the setting, or the light named in lightAttenuation that the
 // scene lacks), InputError for lights or channels that would give NaN (naming the light or
 // the channel). `progress`, when given, advances by one per voxel.

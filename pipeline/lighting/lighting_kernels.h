@@ -37,6 +37,7 @@
 
 #include "core/hostdev.h"
 #include "core/math.h"
+#include "voxel/voxel_scene.h"
 
 #include <nanovdb/NanoVDB.h>
 
@@ -112,27 +113,38 @@ struct LightingView {
 VL_HOSTDEV inline float normL1(const vec3& v) { return glm::abs(v.x) + glm::abs(v.y) + glm::abs(v.z); }
 
 // ---------------------------------------------------------------------------------------
-// Normal weights.
+// Normal weights, per surface side (voxel_scene.h voxelSides): a voxel's faces are grouped
+// into the sides of the surface they show, each side with one unit normal n_s. A side
+// weighs incoming light by one of:
+//   lambert   max(n_s·L, 0);
+//   villegas  Σ_a n_s,a²·max(sign(n_s,a)·L_a, 0) (Villegas 2016 on the side's normal);
+//   six-axis  Σ_{f in side} w_f·max(d_f·L, 0) / Σ_{f in side} w_f (the side's own faces).
+// All three agree on an axis-aligned flat surface; where normals cancel every face is a side
+// of its own with n_s = d_f and all three are max(d_f·L, 0). Lambert is exact for a flat
+// surface of any orientation; six-axis conserves the light a 90° corner of axis-aligned
+// faces receives in total (the mean normal at 45° overstates it by up to √2) but understates
+// a tilted plane (by 1/‖n‖₁, 29 % at 45°).
 
 struct NormalWeight {
     float cosine = 0.0f;
-    vec3 litNormal{0.0f};  // unit normal of the side the light reaches; zero when cosine is 0
+    vec3 litNormal{0.0f};  // unit normal the visibility ray leaves along; zero when cosine is 0
 };
 
-// `n` is the voxel's mean normal (unit or zero), `faces` its six axis weights, `L` the unit
-// direction toward the light.
-VL_HOSTDEV inline NormalWeight normalWeight(int mode, const vec3& n, const float* faces, const vec3& L) {
+// `side` is the side's unit normal, `faces` the voxel's six axis weights, `inSide` which of
+// them belong to the side (bit f), `L` the unit direction toward the light.
+VL_HOSTDEV inline NormalWeight sideWeight(int mode, const vec3& side, const float* faces, unsigned inSide,
+                                          const vec3& L) {
     NormalWeight result;
     vec3 litFaces(0.0f);  // the lit faces' weighted directions, for the lit-side normal
     float cosine = 0.0f;
     if (mode == kWeightLambert) {
-        cosine = glm::max(glm::dot(n, L), 0.0f);
+        cosine = glm::max(glm::dot(side, L), 0.0f);
     } else if (mode == kWeightVillegas) {
         for (int a = 0; a < 3; ++a) {
-            if (n[a] == 0.0f) continue;
-            const float sign = n[a] > 0.0f ? 1.0f : -1.0f;
+            if (side[a] == 0.0f) continue;
+            const float sign = side[a] > 0.0f ? 1.0f : -1.0f;
             const float facing = glm::max(sign * L[a], 0.0f);
-            const float weight = n[a] * n[a];
+            const float weight = side[a] * side[a];
             cosine += weight * facing;
             if (facing > 0.0f) litFaces[a] += weight * sign;
         }
@@ -140,46 +152,41 @@ VL_HOSTDEV inline NormalWeight normalWeight(int mode, const vec3& n, const float
         float total = 0.0f;
         float sum = 0.0f;
         for (int f = 0; f < 6; ++f) {
+            if (!((inSide >> f) & 1u)) continue;
             const int axis = f >> 1;
             const float sign = (f & 1) ? -1.0f : 1.0f;
             const float facing = glm::max(sign * L[axis], 0.0f);
-            // Normalised by the larger face of each ± pair, not their sum (DESIGN.md's form):
-            // a double-sided surface (every Blender export) has equal ± weights, and the sum
-            // made its lit side reflect half the light it receives (measured: Cornell floor
-            // voxels at 0.50 of Lambert's exact irradiance; 1.000 with this). One-sided
-            // surfaces and corners are unchanged.
-            if (!(f & 1)) total += glm::max(faces[f], faces[f + 1]);
+            total += faces[f];
             sum += faces[f] * facing;
             if (facing > 0.0f) litFaces[axis] += faces[f] * sign;
         }
         cosine = total > 0.0f ? sum / total : 0.0f;
     }
     if (!(cosine > 0.0f)) return result;
-    // The mean normal when it faces the light (at a corner it keeps both faces' neighbours in
-    // the surface layer); otherwise the faces that do see the light (thin sheets, corners lit
-    // from one side only).
-    const float nLength = glm::length(n);
-    vec3 side = glm::dot(n, L) > 0.0f && nLength > 0.0f ? n / nLength : litFaces;
-    const float sideLength = glm::length(side);
-    if (!(sideLength > 0.0f)) return result;
+    // The side's normal when it faces the light (at a corner it keeps both faces' neighbours
+    // in the surface layer); otherwise the faces that do see the light (a corner lit from
+    // one face's side only).
+    const vec3 lit = glm::dot(side, L) > 0.0f ? side : litFaces;
+    const float litLength = glm::length(lit);
+    if (!(litLength > 0.0f)) return result;
     result.cosine = glm::min(cosine, 1.0f);
-    result.litNormal = side / sideLength;
+    result.litNormal = lit / litLength;
     return result;
 }
 
-// Whether any face that counts under `mode` faces the (unnormalised) direction d: the
-// weight of a direction is zero exactly when no such face does, and this is linear in d,
-// so three vertices decide it for a whole triangle.
-VL_HOSTDEV inline bool anyFaceSees(int mode, const vec3& n, const float* faces, const vec3& d) {
-    if (mode == kWeightLambert) return glm::dot(n, d) > 0.0f;
+// Whether the side's weight can be non-zero toward the (unnormalised) direction d: it is
+// zero exactly when none of these linear tests is positive, so three vertices decide it for
+// a whole triangle.
+VL_HOSTDEV inline bool sideSees(int mode, const vec3& side, const float* faces, unsigned inSide, const vec3& d) {
+    if (mode == kWeightLambert) return glm::dot(side, d) > 0.0f;
     if (mode == kWeightVillegas) {
         for (int a = 0; a < 3; ++a)
-            if ((n[a] > 0.0f && d[a] > 0.0f) || (n[a] < 0.0f && d[a] < 0.0f)) return true;
+            if ((side[a] > 0.0f && d[a] > 0.0f) || (side[a] < 0.0f && d[a] < 0.0f)) return true;
         return false;
     }
     for (int f = 0; f < 6; ++f) {
         const float sign = (f & 1) ? -1.0f : 1.0f;
-        if (faces[f] > 0.0f && sign * d[f >> 1] > 0.0f) return true;
+        if (((inSide >> f) & 1u) && faces[f] > 0.0f && sign * d[f >> 1] > 0.0f) return true;
     }
     return false;
 }
@@ -379,22 +386,28 @@ VL_HOSTDEV inline float visibilityLoss(const LightingView& view, IndexAccessor& 
 }
 
 // ---------------------------------------------------------------------------------------
-// One voxel, all lights.
+// One voxel, all lights: every surface side of the voxel (voxelSides) is lit on its own, with
+// one visibility ray per light and lit side, and every face shows its side's radiance.
 
 struct VoxelLighting {
-    vec3 radiance{0.0f};
-    float occlusion = 0.0f;
+    vec3 radiance{0.0f};          // faceWeightedMean of the faces (voxel_scene.h)
+    vec3 faceRadiance[6] = {};    // +X, −X, +Y, −Y, +Z, −Z; zero for a face without surface
+    float occlusion = 0.0f;       // mean V over the lights (and lit sides) that reach the voxel
 };
 
 template <bool Hierarchical>
 VL_HOSTDEV inline VoxelLighting shadeVoxel(const LightingView& view, IndexAccessor& accessor, uint32_t i,
                                            KernelStats& stats) {
     const vec3 receiver(view.coords[i]);
-    const vec3 n = view.normal[i];
     const float* faces = view.axisWeights + 6 * static_cast<size_t>(i);
+    const VoxelSides sides = voxelSides(view.normal[i], faces);
+    unsigned inSide[6] = {0u, 0u, 0u, 0u, 0u, 0u};
+    for (int f = 0; f < 6; ++f)
+        if (sides.sideOfFace[f] >= 0) inSide[sides.sideOfFace[f]] |= 1u << f;
+    const int mode = view.normalWeighting;
     const float h = view.voxelSize;
     const float minDistance = 0.5f * h;
-    vec3 irradiance(0.0f);
+    vec3 irradiance[6] = {vec3(0.0f), vec3(0.0f), vec3(0.0f), vec3(0.0f), vec3(0.0f), vec3(0.0f)};
     float occlusionSum = 0.0f;
     uint32_t lightsReaching = 0;
 
@@ -411,31 +424,40 @@ VL_HOSTDEV inline VoxelLighting shadeVoxel(const LightingView& view, IndexAccess
             L = toLight / d;
             distance = d * h;
         }
-        const NormalWeight w = normalWeight(view.normalWeighting, n, faces, L);
-        if (!(w.cosine > 0.0f)) continue;
         const vec3 E = punctualIrradiance(light, L, distance, minDistance);
         if (!(maxComponent(E) > 0.0f)) continue;
+        float loss = 0.0f;
+        int sidesLit = 0;
+        for (int s = 0; s < sides.count; ++s) {
+            const NormalWeight w = sideWeight(mode, sides.normal[s], faces, inSide[s], L);
+            if (!(w.cosine > 0.0f)) continue;
+            float V = 0.0f;
+            if (view.visibility)
+                V = visibilityLoss<Hierarchical>(view, accessor, receiver, w.litNormal, L, light.position,
+                                                 light.type == kDirectionalLight, RayEnd{}, stats.steps);
+            irradiance[s] += E * (w.cosine * (1.0f - V));
+            loss += V;
+            ++sidesLit;
+        }
+        if (sidesLit == 0) continue;
         ++stats.evaluations;
-        float V = 0.0f;
-        if (view.visibility)
-            V = visibilityLoss<Hierarchical>(view, accessor, receiver, w.litNormal, L, light.position,
-                                             light.type == kDirectionalLight, RayEnd{}, stats.steps);
-        irradiance += E * (w.cosine * (1.0f - V));
-        occlusionSum += V;
+        occlusionSum += loss / static_cast<float>(sidesLit);
         ++lightsReaching;
     }
 
     for (uint32_t e = 0; e < view.emitterCount; ++e) {
         const EmitterTriangle& tri = view.emitters[e];
         // Behind the emitter (or in its plane): no sample can reach the voxel's centre.
-        const float side = glm::dot(tri.normal, receiver - tri.v0);
-        if (side == 0.0f || (side < 0.0f && !tri.doubleSided)) continue;
-        // Behind every face of the voxel that counts.
-        if (!anyFaceSees(view.normalWeighting, n, faces, tri.v0 - receiver) &&
-            !anyFaceSees(view.normalWeighting, n, faces, tri.v1 - receiver) &&
-            !anyFaceSees(view.normalWeighting, n, faces, tri.v2 - receiver))
-            continue;
-        const vec3 frontNormal = side > 0.0f ? tri.normal : -tri.normal;
+        const float facingEmitter = glm::dot(tri.normal, receiver - tri.v0);
+        if (facingEmitter == 0.0f || (facingEmitter < 0.0f && !tri.doubleSided)) continue;
+        // Behind every side of the voxel.
+        bool seen = false;
+        for (int s = 0; s < sides.count && !seen; ++s)
+            seen = sideSees(mode, sides.normal[s], faces, inSide[s], tri.v0 - receiver) ||
+                   sideSees(mode, sides.normal[s], faces, inSide[s], tri.v1 - receiver) ||
+                   sideSees(mode, sides.normal[s], faces, inSide[s], tri.v2 - receiver);
+        if (!seen) continue;
+        const vec3 frontNormal = facingEmitter > 0.0f ? tri.normal : -tri.normal;
         const float emitterLayer = 0.5f * normL1(tri.normal);
         float triangleLoss = 0.0f;
         uint32_t samplesReaching = 0;
@@ -447,23 +469,30 @@ VL_HOSTDEV inline VoxelLighting shadeVoxel(const LightingView& view, IndexAccess
             const vec3 L = toSample / d;
             const float cosEmitter = -glm::dot(frontNormal, L);
             if (!(cosEmitter > 0.0f)) continue;
-            const NormalWeight w = normalWeight(view.normalWeighting, n, faces, L);
-            if (!(w.cosine > 0.0f)) continue;
             const float r = glm::max(d * h, minDistance);
             const vec3 E = sample.power * (cosEmitter / (r * r));
             if (!(maxComponent(E) > 0.0f)) continue;
-            ++stats.evaluations;
-            float V = 0.0f;
-            if (view.visibility) {
-                RayEnd end;
-                end.point = sample.position;
-                end.normal = frontNormal;
-                end.layer = emitterLayer;
-                V = visibilityLoss<Hierarchical>(view, accessor, receiver, w.litNormal, L, sample.position, false, end,
-                                                 stats.steps);
+            float loss = 0.0f;
+            int sidesLit = 0;
+            for (int s = 0; s < sides.count; ++s) {
+                const NormalWeight w = sideWeight(mode, sides.normal[s], faces, inSide[s], L);
+                if (!(w.cosine > 0.0f)) continue;
+                float V = 0.0f;
+                if (view.visibility) {
+                    RayEnd end;
+                    end.point = sample.position;
+                    end.normal = frontNormal;
+                    end.layer = emitterLayer;
+                    V = visibilityLoss<Hierarchical>(view, accessor, receiver, w.litNormal, L, sample.position, false,
+                                                     end, stats.steps);
+                }
+                irradiance[s] += E * (w.cosine * (1.0f - V));
+                loss += V;
+                ++sidesLit;
             }
-            irradiance += E * (w.cosine * (1.0f - V));
-            triangleLoss += V;
+            if (sidesLit == 0) continue;
+            ++stats.evaluations;
+            triangleLoss += loss / static_cast<float>(sidesLit);
             ++samplesReaching;
         }
         if (samplesReaching > 0) {
@@ -473,7 +502,12 @@ VL_HOSTDEV inline VoxelLighting shadeVoxel(const LightingView& view, IndexAccess
     }
 
     VoxelLighting result;
-    result.radiance = view.albedo[i] * kInvPi * irradiance;
+    const vec3 reflectance = view.albedo[i] * kInvPi;
+    for (int f = 0; f < 6; ++f) {
+        const int s = sides.sideOfFace[f];
+        result.faceRadiance[f] = s >= 0 ? reflectance * irradiance[s] : vec3(0.0f);
+    }
+    result.radiance = faceWeightedMean(result.faceRadiance, faces);
     result.occlusion = lightsReaching > 0 ? occlusionSum / static_cast<float>(lightsReaching) : 0.0f;
     return result;
 }

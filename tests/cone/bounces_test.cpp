@@ -57,14 +57,15 @@ TEST_CASE("one bounce in a closed white box adds albedo times L0", "[cone]") {
 
 TEST_CASE("voxels whose normals cancel gather over both sides", "[cone]") {
     // A two-sided sheet across a closed box: normal zero, axis weights on +X and −X. Both
-    // half-rooms radiate L, so each side gathers π L and so does their weighted mean.
+    // half-rooms radiate L, so each face gathers π L from its own half-room.
     const float h = 0.1f;
     const vec3 l0(1.0f);
     VoxelScene scene = [&] {
         VoxelScene box = vl::test::closedBox(17, 1, l0, vec3(0.0f), h);
         SceneBuilder builder(h);
         for (size_t i = 0; i < box.size(); ++i) {
-            VoxelSpec spec{box.radiance[i], box.opacity[i], true, box.albedo[i], box.normal[i], box.axisWeights[i]};
+            VoxelSpec spec{box.radiance[i], box.opacity[i], true, box.albedo[i], box.normal[i], box.axisWeights[i],
+                           true, box.faceRadiance[i]};
             builder.add(box.coords[i], spec);
         }
         VoxelSpec sheet;
@@ -79,22 +80,73 @@ TEST_CASE("voxels whose normals cancel gather over both sides", "[cone]") {
     const ConeSet& set = coneSet(16);
     const vec3 centre = vec3(8.0f) * h;
     const float weights[6] = {0.5f, 0.5f, 0, 0, 0, 0};
-    const vec3 e = voxelIrradiance(mips.view(), centre, vec3(0.0f), weights, set, ConeSettings{});
-    CHECK(e.x == Approx(kPi).epsilon(0.1));  // the closed-box gather tolerance
-    // One-sided weights see one half-room: the same, so compare with an explicit normal.
+    vec3 e[6];
+    faceIrradiance(mips.view(), centre, vec3(0.0f), weights, set, ConeSettings{}, e);
+    CHECK(e[0].x == Approx(kPi).epsilon(0.1));  // the closed-box gather tolerance
+    CHECK(e[1].x == Approx(kPi).epsilon(0.1));
+    for (int f = 2; f < 6; ++f) CHECK(e[f] == vec3(0.0f));  // no surface there
+    // The +X face gathers along +X whether it is a side of its own (normal zero) or the front
+    // of a double-sided surface with normal +X, whose back gathers along −X.
     const float plusX[6] = {1.0f, 0, 0, 0, 0, 0};
-    const vec3 onlyPlus = voxelIrradiance(mips.view(), centre, vec3(0.0f), plusX, set, ConeSettings{});
-    const vec3 byNormal = voxelIrradiance(mips.view(), centre, vec3(1, 0, 0), weights, set, ConeSettings{});
-    CHECK(onlyPlus == byNormal);
+    vec3 onlyPlus[6], byNormal[6];
+    faceIrradiance(mips.view(), centre, vec3(0.0f), plusX, set, ConeSettings{}, onlyPlus);
+    faceIrradiance(mips.view(), centre, vec3(1, 0, 0), weights, set, ConeSettings{}, byNormal);
+    CHECK(onlyPlus[0] == byNormal[0]);
+    CHECK(onlyPlus[0] == e[0]);
+    CHECK(byNormal[1] == e[1]);
+    CHECK(onlyPlus[1] == vec3(0.0f));
     // No normal and no weights: nothing to gather from.
     const float none[6] = {};
-    CHECK(voxelIrradiance(mips.view(), centre, vec3(0.0f), none, set, ConeSettings{}) == vec3(0.0f));
+    vec3 nothing[6];
+    faceIrradiance(mips.view(), centre, vec3(0.0f), none, set, ConeSettings{}, nothing);
+    for (const vec3& v : nothing) CHECK(v == vec3(0.0f));
 
-    // Through propagateBounces: the sheet (albedo 1, dark) becomes ≈ L0.
+    // Through propagateBounces: each face of the sheet (albedo 1, dark) becomes ≈ L0.
     propagateBounces(scene, settingsFor(16), 1);
     for (size_t i = 0; i < scene.size(); ++i)
-        if (scene.coords[i].x == 8 && scene.coords[i].y == 8 && scene.coords[i].z == 8)
-            CHECK(scene.radiance[i].x == Approx(1.0f).epsilon(0.1));
+        if (scene.coords[i].x == 8 && scene.coords[i].y == 8 && scene.coords[i].z == 8) {
+            CHECK(scene.faceRadiance[i][0].x == Approx(1.0f).epsilon(0.1));
+            CHECK(scene.faceRadiance[i][1].x == Approx(1.0f).epsilon(0.1));
+            CHECK(scene.faceRadiance[i][2] == vec3(0.0f));
+        }
+}
+
+TEST_CASE("a bounce off a thin wall lit on one side stays on that side", "[cone]") {
+    // A closed box split by a double-sided wall one voxel thick (normal +X, equal ± weights):
+    // the +X half-room radiates L0, the −X half-room is dark, and the wall's faces reflect
+    // what they gather. Its +X face gathers from the bright half-room; its −X face sees only
+    // dark surfaces, so it stays exactly dark: light does not cross the wall.
+    const float h = 0.1f;
+    const int n = 17, wallX = 8;
+    const vec3 l0(1.0f);
+    VoxelScene box = vl::test::closedBox(n, 1, l0, vec3(0.0f), h);
+    SceneBuilder builder(h);
+    for (size_t i = 0; i < box.size(); ++i) {
+        const bool bright = box.coords[i].x > wallX;
+        VoxelSpec spec{bright ? l0 : vec3(0.0f), 1.0f, true, vec3(0.0f), box.normal[i], box.axisWeights[i], true, {}};
+        for (size_t f = 0; f < 6; ++f) spec.faces[f] = bright ? box.faceRadiance[i][f] : vec3(0.0f);
+        builder.add(box.coords[i], spec);
+    }
+    VoxelSpec wall;
+    wall.albedo = vec3(1.0f);
+    wall.normal = vec3(1, 0, 0);
+    wall.axisWeights = {1, 1, 0, 0, 0, 0};
+    wall.directional = true;
+    for (int y = -1; y <= n; ++y)
+        for (int z = -1; z <= n; ++z) builder.add(ivec3(wallX, y, z), wall);
+    VoxelScene scene = builder.build();
+    propagateBounces(scene, settingsFor(16), 1);
+    size_t litBack = 0, darkFront = 0, inside = 0;
+    for (size_t i = 0; i < scene.size(); ++i) {
+        const ivec3 c = scene.coords[i];
+        if (c.x != wallX || c.y < 2 || c.y > n - 3 || c.z < 2 || c.z > n - 3) continue;
+        ++inside;
+        litBack += scene.faceRadiance[i][1] == vec3(0.0f) ? 0 : 1;
+        darkFront += scene.faceRadiance[i][0].x > 0.5f ? 0 : 1;
+    }
+    CHECK(inside == size_t((n - 4) * (n - 4)));
+    CHECK(litBack == 0);
+    CHECK(darkFront == 0);
 }
 
 TEST_CASE("propagateBounces gives the same bytes with 1 and 2 threads", "[cone]") {

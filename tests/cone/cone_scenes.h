@@ -16,6 +16,10 @@ struct VoxelSpec {
     vec3 albedo = vec3(0.0f);
     vec3 normal = vec3(0.0f);
     AxisWeights axisWeights = {};
+    // Per-face radiance; a scene with any directional voxel gets faceRadiance, where the
+    // others show `radiance` on their faces with an axis weight.
+    bool directional = false;
+    FaceRadiance faces = {};
 };
 
 // Collects voxels by coordinate (a later add replaces an earlier one) and emits a
@@ -30,7 +34,15 @@ public:
         VoxelScene scene;
         scene.voxelSize = voxelSize_;
         scene.sourceScene = "synthetic";
+        bool directional = false;
+        for (const auto& entry : voxels_) directional = directional || entry.second.directional;
         for (const auto& [key, spec] : voxels_) {
+            if (directional) {
+                FaceRadiance faces = spec.faces;
+                if (!spec.directional)
+                    for (size_t f = 0; f < 6; ++f) faces[f] = spec.axisWeights[f] > 0.0f ? spec.radiance : vec3(0.0f);
+                scene.faceRadiance.push_back(faces);
+            }
             scene.coords.emplace_back(std::get<0>(key), std::get<1>(key), std::get<2>(key));
             scene.radiance.push_back(spec.radiance);
             scene.opacity.push_back(spec.opacity);
@@ -48,8 +60,9 @@ private:
 };
 
 // Closed box: interior voxels 0 … n−1 on each axis, walls `thickness` voxels thick around
-// it, every wall voxel radiating `radiance` with inward normal (edges and corners: the
-// normalised sum of their faces' normals) and albedo `albedo`.
+// it, every wall voxel radiating `radiance` from its inward faces (edges and corners: two or
+// three; the others show nothing), with inward normal (edges and corners: the normalised sum
+// of their faces' normals) and albedo `albedo`.
 inline VoxelScene closedBox(int n, int thickness, vec3 radiance, vec3 albedo = vec3(0.0f), double h = 0.1) {
     SceneBuilder builder(h);
     for (int x = -thickness; x < n + thickness; ++x)
@@ -71,6 +84,8 @@ inline VoxelScene closedBox(int n, int thickness, vec3 radiance, vec3 albedo = v
                     if (inward[a] > 0.0f) spec.axisWeights[2 * a] = 1.0f;
                     if (inward[a] < 0.0f) spec.axisWeights[2 * a + 1] = 1.0f;
                 }
+                spec.directional = true;
+                for (size_t f = 0; f < 6; ++f) spec.faces[f] = spec.axisWeights[f] > 0.0f ? radiance : vec3(0.0f);
                 builder.add(c, spec);
             }
     return builder.build();

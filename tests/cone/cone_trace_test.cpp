@@ -248,3 +248,71 @@ TEST_CASE("degenerate receivers give finite irradiance", "[cone]") {
     flat.apertureDegrees = 89.9f;
     CHECK(isFinite(coneTraceIrradiance(view, vec3(0.35f), vec3(0, 0, 1), set, flat)));
 }
+
+TEST_CASE("cones from the dark side of a thin wall lit on the other side gather nothing from it", "[cone]") {
+    // A solid double-sided wall one voxel thick (normal +X, equal ± weights) whose +X face
+    // radiates L (lit from that side) and whose −X face is dark. Receivers on the −X side
+    // facing it gather exactly 0 at every distance. With one isotropic radiance per voxel
+    // (the wall voxel's mean, L) the same receivers see the lit side through the wall.
+    const float h = 0.1f;
+    const vec3 lit(1.0f, 0.5f, 0.25f);
+    SceneBuilder builder(h);
+    VoxelSpec wall;
+    wall.normal = vec3(1, 0, 0);
+    wall.axisWeights = {1, 1, 0, 0, 0, 0};
+    wall.directional = true;
+    wall.faces[0] = lit;
+    wall.radiance = lit;  // faceWeightedMean: the lit side
+    for (int y = -24; y <= 24; ++y)
+        for (int z = -24; z <= 24; ++z) builder.add(ivec3(0, y, z), wall);
+    VoxelScene scene = builder.build();
+    const RadianceMips directional = buildRadianceMips(scene);
+    scene.faceRadiance.clear();
+    const RadianceMips isotropic = buildRadianceMips(scene);
+    for (int count : {6, 16, 32})
+        for (float distance : {1.5f, 3.0f, 8.0f})
+            for (const vec3 n : {vec3(1, 0, 0), glm::normalize(vec3(1.0f, 0.4f, -0.3f))}) {
+                const vec3 p = vec3(-distance, 0.3f, -0.2f) * h;
+                float occlusion = 0.0f;
+                const vec3 e = coneTraceIrradiance(directional.view(), p, n, coneSet(count), settingsFor(count), &occlusion);
+                const vec3 leak = coneTraceIrradiance(isotropic.view(), p, n, coneSet(count), settingsFor(count));
+                INFO(count << " cones, " << distance << " voxels before the wall: E = " << e.x << " (isotropic "
+                           << leak.x << ", E/π = " << leak.x / kPi << " of L " << lit.x << "), occlusion " << occlusion);
+                CHECK(e == vec3(0.0f));
+                CHECK(occlusion > 0.5f);  // the wall is there and opaque
+                CHECK(leak.x > 0.3f * kPi * lit.x);
+            }
+}
+
+TEST_CASE("a voxel with a bright top face and a dark side face looks bright only from above", "[cone]") {
+    // The edge voxel of a block: top face +Y radiates L, side face +X is dark. A narrow cone
+    // from above sees L (times its opacity); one from the +X side sees it opaque and dark;
+    // one at 45° between them sees both faces with equal coverage: L/2.
+    const float h = 0.1f;
+    const vec3 bright(2.0f, 1.0f, 0.5f);
+    SceneBuilder builder(h);
+    VoxelSpec edge;
+    edge.normal = glm::normalize(vec3(1, 1, 0));
+    edge.axisWeights = {1, 0, 1, 0, 0, 0};
+    edge.directional = true;
+    edge.faces[2] = bright;
+    edge.radiance = 0.5f * bright;
+    builder.add(ivec3(0), edge);
+    const RadianceMips mips = buildRadianceMips(builder.build());
+    const MipView view = mips.view();
+    const auto look = [&](const vec3& from) {
+        return traceCone(view, from * (12.0f * h), -glm::normalize(from), 0.01f, 0.5f, 0.0f);
+    };
+    const ConeResult above = look(vec3(0, 1, 0));
+    CHECK(above.occlusion > 0.99f);
+    CHECK(glm::distance(above.radiance, bright * above.occlusion) < 1e-5f);
+    const ConeResult side = look(vec3(1, 0, 0));
+    CHECK(side.occlusion > 0.99f);
+    CHECK(side.radiance == vec3(0.0f));
+    const ConeResult diagonal = look(glm::normalize(vec3(1, 1, 0)));
+    CHECK(glm::distance(diagonal.radiance, 0.5f * bright * diagonal.occlusion) < 1e-5f);
+    // From below (the −Y face has no surface and faces nothing bright): opaque and dark.
+    const ConeResult below = look(vec3(0, -1, 0));
+    CHECK(below.occlusion > 0.99f);
+    CHECK(below.radiance == vec3(0.0f));
+}

@@ -141,8 +141,7 @@ TEST_CASE("sampling at a level-k voxel centre returns the average of its childre
                     const ivec3 c = 2 * parent + ivec3(d & 1, (d >> 1) & 1, d >> 2);
                     const auto it = childIndex.find(std::make_tuple(c.x, c.y, c.z));
                     if (it == childIndex.end()) continue;
-                    const MipTexel& t =
-                        children.texels[it->second * size_t(children.facesPerVoxel) + size_t(k == 1 ? 0 : face)];
+                    const MipTexel& t = children.texels[it->second * size_t(children.facesPerVoxel) + size_t(face)];
                     average += vec4(t.radiance, t.alpha) / 8.0f;
                     if (face == 0) isotropic += children.values[it->second] / 8.0f;
                 }

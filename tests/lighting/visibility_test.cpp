@@ -174,7 +174,10 @@ TEST_CASE("A voxel on a 90 degree edge lit from either face is lit under villega
     }
 }
 
-TEST_CASE("A two-sided thin sheet is lit from both sides under six-axis and never NaN", "[lighting]") {
+TEST_CASE("A two-sided thin sheet is lit on the face toward the light in every mode and never NaN", "[lighting]") {
+    // Normals cancel, so each face is a surface side of its own with its axis as normal, and
+    // all three weights reduce to max(dir_face·L, 0) there. (Before per-face radiance,
+    // lambert and villegas left such a sheet dark: its zero mean normal faced nothing.)
     VoxelBuilder builder(kH);
     SyntheticVoxel sheet;
     sheet.normal = vec3(0.0f);
@@ -183,6 +186,7 @@ TEST_CASE("A two-sided thin sheet is lit from both sides under six-axis and neve
         for (int v = -8; v <= 8; ++v) builder.set(ivec3(u, v, 0), sheet);
     for (float side : {1.0f, -1.0f}) {
         const Light light = pointLight(vec3(0.1f, 0.2f, side * 1.0f), 2.0f);
+        const size_t litFace = side > 0.0f ? 4 : 5, darkFace = side > 0.0f ? 5 : 4;
         for (NormalWeighting mode : kModes) {
             VoxelScene voxels = builder.build();
             LightingSettings settings;
@@ -193,15 +197,114 @@ TEST_CASE("A two-sided thin sheet is lit from both sides under six-axis and neve
             for (size_t i = 0; i < voxels.size(); ++i) {
                 const vec3 d = light.position - voxels.centre(i);
                 const float r = glm::length(d);
-                // Six-axis normalises by the larger face of each ± pair: the lit face of a
-                // two-sided sheet reflects all it receives, I·|cosθ|/r² (not half of it).
-                const float expected = mode == NormalWeighting::SixAxis ? 0.5f * kInvPi * 2.0f * std::abs(d.z) / r / (r * r) : 0.0f;
+                // The mean normalises by the larger face of each ± pair: the sheet shows its
+                // lit face's radiance I·|cosθ|/r² (not half of it).
+                const float expected = 0.5f * kInvPi * 2.0f * std::abs(d.z) / r / (r * r);
+                const FaceRadiance& faces = voxels.faceRadiance[i];
                 bad += std::abs(voxels.radiance[i].x - expected) <= 1e-5f * expected ? 0 : 1;
+                bad += std::abs(faces[litFace].x - expected) <= 1e-5f * expected ? 0 : 1;
+                bad += faces[darkFace] == vec3(0.0f) && faces[0] == vec3(0.0f) && faces[2] == vec3(0.0f) ? 0 : 1;
             }
             INFO("side " << side << " mode " << toString(mode));
             CHECK(bad == 0);
         }
     }
+}
+
+TEST_CASE("Faces are grouped into the front and back of a surface and faces of their own where normals cancel", "[lighting]") {
+    // A double-sided tilted surface: front n, back −n.
+    const vec3 n = glm::normalize(vec3(1.0f, 2.0f, 0.0f));
+    const float doubleSided[6] = {0.4f, 0.4f, 0.9f, 0.9f, 0.0f, 0.0f};
+    const VoxelSides twoSides = voxelSides(n, doubleSided);
+    REQUIRE(twoSides.count == 2);
+    CHECK(glm::distance(twoSides.normal[0], n) < 1e-6f);
+    CHECK(glm::distance(twoSides.normal[1], -n) < 1e-6f);
+    const int expected[6] = {0, 1, 0, 1, -1, -1};
+    for (int f = 0; f < 6; ++f) CHECK(twoSides.sideOfFace[f] == expected[f]);
+    // Normals cancelled: one side per face with a surface, along the face's axis.
+    const float box[6] = {1, 1, 0, 2, 0, 0};
+    const VoxelSides cancelled = voxelSides(vec3(0.0f), box);
+    REQUIRE(cancelled.count == 3);
+    CHECK(cancelled.normal[0] == vec3(1, 0, 0));
+    CHECK(cancelled.normal[1] == vec3(-1, 0, 0));
+    CHECK(cancelled.normal[2] == vec3(0, -1, 0));
+    CHECK(cancelled.sideOfFace[3] == 2);
+    CHECK(cancelled.sideOfFace[2] == -1);
+    // A face perpendicular to the mean normal shows no side of it: a side of its own.
+    const float channel[6] = {0.5f, 0.5f, 1, 0, 0, 0};
+    const VoxelSides floorBetweenWalls = voxelSides(vec3(0, 1, 0), channel);
+    REQUIRE(floorBetweenWalls.count == 3);
+    CHECK(floorBetweenWalls.normal[floorBetweenWalls.sideOfFace[0]] == vec3(1, 0, 0));
+    CHECK(floorBetweenWalls.normal[floorBetweenWalls.sideOfFace[1]] == vec3(-1, 0, 0));
+    CHECK(floorBetweenWalls.normal[floorBetweenWalls.sideOfFace[2]] == vec3(0, 1, 0));
+    // The isotropic mean: Σ w·L / Σ_axes max(w+, w−).
+    const vec3 values[6] = {vec3(1), vec3(3), vec3(2), vec3(0), vec3(7), vec3(5)};
+    CHECK(faceWeightedMean(values, doubleSided)[0] == Approx((0.4f * 4.0f + 0.9f * 2.0f) / 1.3f));
+}
+
+TEST_CASE("A double-sided wall lit on one side shows its light on that side only", "[lighting]") {
+    // Front normal +X, equal ± weights (how a double-sided material voxelizes); a light on
+    // the −X side reaches the back faces only. The back is lit through its own side, the
+    // front faces stay exactly dark in every mode, and the mean shows the lit side.
+    VoxelBuilder builder(kH);
+    SyntheticVoxel wall = surfaceVoxel(vec3(1, 0, 0));
+    wall.axisWeights = {1, 1, 0, 0, 0, 0};
+    for (int y = -6; y <= 6; ++y)
+        for (int z = -6; z <= 6; ++z) builder.set(ivec3(0, y, z), wall);
+    const Light light = pointLight(vec3(-1.0f, 0.1f, 0.05f), 3.0f);
+    for (NormalWeighting mode : kModes) {
+        VoxelScene voxels = builder.build();
+        LightingSettings settings;
+        settings.normalWeights = mode;
+        lightVoxels(lightsOnly({light}), voxels, settings);
+        size_t bad = 0;
+        for (size_t i = 0; i < voxels.size(); ++i) {
+            const vec3 d = light.position - voxels.centre(i);
+            const float r = glm::length(d);
+            const float expected = 0.5f * kInvPi * 3.0f * (-d.x / r) / (r * r);
+            const FaceRadiance& faces = voxels.faceRadiance[i];
+            bad += std::abs(faces[1].x - expected) <= 1e-5f * expected ? 0 : 1;
+            bad += faces[0] == vec3(0.0f) ? 0 : 1;
+            bad += std::abs(voxels.radiance[i].x - expected) <= 1e-5f * expected ? 0 : 1;
+        }
+        INFO("mode " << toString(mode));
+        CHECK(bad == 0);
+    }
+}
+
+TEST_CASE("Each side of a double-sided floor steps its own visibility", "[lighting]") {
+    // Lights above and below a double-sided floor; a solid plate under the floor shadows the
+    // light below from the back side only. The front keeps the light above, unshadowed.
+    VoxelBuilder builder(kH);
+    SyntheticVoxel floor = surfaceVoxel(vec3(0, 0, 1));
+    floor.axisWeights = {0, 0, 0, 0, 1, 1};
+    for (int x = -5; x <= 5; ++x)
+        for (int y = -5; y <= 5; ++y) builder.set(ivec3(x, y, 0), floor);
+    const Light above = pointLight(vec3(0.02f, 0.03f, 2.0f), 4.0f, "above");
+    const Light below = pointLight(vec3(-0.03f, 0.01f, -2.0f), 4.0f, "below");
+    const auto lit = [&](bool plate) {
+        VoxelBuilder b = builder;
+        if (plate)
+            for (int x = -40; x <= 40; ++x)
+                for (int y = -40; y <= 40; ++y) b.set(ivec3(x, y, -4), surfaceVoxel(vec3(0, 0, -1)));
+        VoxelScene voxels = b.build();
+        lightVoxels(lightsOnly({above, below}), voxels, LightingSettings{});
+        return voxels;
+    };
+    const VoxelScene open = lit(false), shadowed = lit(true);
+    const size_t centre = indexOf(open, ivec3(0));
+    const auto irradiance = [&](const Light& light) {
+        const vec3 d = light.position - open.centre(centre);
+        const float r = glm::length(d);
+        return 0.5f * kInvPi * 4.0f * std::abs(d.z) / r / (r * r);
+    };
+    CHECK(open.faceRadiance[centre][4].x == Approx(irradiance(above)).epsilon(1e-5));
+    CHECK(open.faceRadiance[centre][5].x == Approx(irradiance(below)).epsilon(1e-5));
+    const size_t shadowedCentre = indexOf(shadowed, ivec3(0));
+    CHECK(shadowed.faceRadiance[shadowedCentre][4].x == Approx(irradiance(above)).epsilon(1e-5));
+    CHECK(shadowed.faceRadiance[shadowedCentre][5] == vec3(0.0f));
+    // Two lights, each reaching one side: one unshadowed (V 0), one shadowed (V 1).
+    CHECK(shadowed.occlusion[shadowedCentre] == Approx(0.5f));
 }
 
 namespace {
@@ -362,6 +465,7 @@ TEST_CASE("Radiance and occlusion are the same bytes with 1 and 2 threads", "[li
     lightVoxels(base.scene, two, settings);
     REQUIRE(one.size() == two.size());
     CHECK(std::memcmp(one.radiance.data(), two.radiance.data(), one.size() * sizeof(vec3)) == 0);
+    CHECK(std::memcmp(one.faceRadiance.data(), two.faceRadiance.data(), one.size() * sizeof(FaceRadiance)) == 0);
     CHECK(std::memcmp(one.occlusion.data(), two.occlusion.data(), one.size() * sizeof(float)) == 0);
     CHECK(allFinite(one));
 }
@@ -377,6 +481,7 @@ TEST_CASE("HDDA empty-space skipping gives the same bytes as the one-voxel DDA i
         const LightingStats ddaStats = lightVoxels(base.scene, dda, settings);
         INFO("mode " << toString(mode));
         CHECK(std::memcmp(hdda.radiance.data(), dda.radiance.data(), hdda.size() * sizeof(vec3)) == 0);
+        CHECK(std::memcmp(hdda.faceRadiance.data(), dda.faceRadiance.data(), hdda.size() * sizeof(FaceRadiance)) == 0);
         CHECK(std::memcmp(hdda.occlusion.data(), dda.occlusion.data(), hdda.size() * sizeof(float)) == 0);
         CHECK(hddaStats.voxelLightEvaluations == ddaStats.voxelLightEvaluations);
         CHECK(hddaStats.visibilitySteps < ddaStats.visibilitySteps);
