@@ -5,6 +5,7 @@
 #include "cone/bounces.h"
 #include "core/error.h"
 #include "core/progress.h"
+#include "cuda/launchers.h"
 #include "lighting/lighting.h"
 #include "trace/bvh.h"
 #include "trace/camera.h"
@@ -14,6 +15,7 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <iostream>
 #include <unistd.h>
 
 namespace vl {
@@ -108,6 +110,14 @@ BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& d
     if (scene.lights.empty() && !scene.hasEmitters())
         diagnostics.warn(scene.sourcePath + ": the scene has no lights and no emissive materials: the bake is black");
 
+    // Voxel lighting and receiver shading run on the GPU when the settings pick it.
+    const bool onGpu = cuda::resolveDevice(settings.device, std::cerr);
+    const auto shade = [&](const SurfaceSampleSet& receivers, const TraceSceneView& sceneView, const BvhView& bvhView,
+                           const MipView& mipView, Progress& progress) {
+        if (onGpu) return cuda::shadeReceiversCuda(receivers, sceneView, bvhView, &mipView, settings.cone, settings.direct);
+        return shadeReceivers(receivers, sceneView, bvhView, &mipView, settings.cone, settings.direct, &progress);
+    };
+
     BakeResult result;
     result.voxels = timed(result.stages, "voxelize", [&] {
         Progress progress("voxelize", scene.triangleCount(), settings.quiet);
@@ -115,6 +125,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& d
     });
     timed(result.stages, "voxel light", [&] {
         Progress progress("voxel light", result.voxels.size(), settings.quiet);
+        if (onGpu) return cuda::lightVoxelsCuda(scene, result.voxels, settings.lighting);
         return lightVoxels(scene, result.voxels, settings.lighting, &progress);
     });
     timed(result.stages, "bounces", [&] {
@@ -134,8 +145,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& d
         timed(result.stages, "lightmaps", [&] {
             for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, settings.lightmap, diagnostics)) {
                 Progress progress("lightmap " + atlas.name, atlas.receivers.elementCount(), settings.quiet);
-                const ReceiverLighting lit = shadeReceivers(atlas.receivers, sceneView, bvhView, &mipView,
-                                                            settings.cone, settings.direct, &progress);
+                const ReceiverLighting lit = shade(atlas.receivers, sceneView, bvhView, mipView, progress);
                 progress.finish();
                 BakedLightmap baked{atlas.name, sumRgb(lit.direct, lit.indirect), lit.direct, lit.indirect, atlas.mask,
                                     atlas.coveredTexels};
@@ -157,8 +167,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& d
                 const CameraModel model = makeCameraModel(camera, settings.imageWidth, settings.imageHeight);
                 const CameraReceivers receivers = buildCameraReceivers(traceScene, bvh, model, settings.imageSubsamples);
                 Progress progress("image", receivers.receivers.elementCount(), settings.quiet);
-                const ReceiverLighting lit = shadeReceivers(receivers.receivers, sceneView, bvhView, &mipView,
-                                                            settings.cone, settings.direct, &progress);
+                const ReceiverLighting lit = shade(receivers.receivers, sceneView, bvhView, mipView, progress);
                 progress.finish();
                 result.images.push_back({camera.name,
                                          sumRgb(sumRgb(receivers.emission, lit.directRadiance), lit.indirectRadiance),

@@ -83,6 +83,9 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.outputs.images = parseBoolSetting("images", v); }},
         {"grids", "write grids.vdb (default true)",
          [](S& s, const std::string& v) { s.outputs.grids = parseBoolSetting("grids", v); }},
+        // Device
+        {"device", "cpu, cuda or auto (the GPU when one is usable, else the CPU with a message) (default cpu)",
+         [](S& s, const std::string& v) { s.device = cuda::parseDeviceChoice(v); }},
     };
     return table;
 }
@@ -110,6 +113,7 @@ std::string describeBakeSettings(const BakeSettings& s) {
     if (s.lighting.attenuation)
         out << ", attenuation=" << s.lighting.attenuation->constant << "," << s.lighting.attenuation->linear << ","
             << s.lighting.attenuation->quadratic;
+    if (s.device != cuda::DeviceChoice::Cpu) out << ", device=" << cuda::toString(s.device);
     return out.str();
 }
 

@@ -6,6 +6,7 @@
 #include "bake/receivers.h"
 #include "bake/settings_table.h"
 #include "cone/cone_settings.h"
+#include "cuda/device_choice.h"
 #include "lighting/lighting.h"
 #include "voxel/voxel_scene.h"
 
@@ -35,6 +36,9 @@ struct BakeSettings {
     BakeOutputs outputs;
     bool strict = false;  // every warning is an error
     bool quiet = false;   // no progress on stderr
+    // [added by cuda] Where voxel lighting and receiver shading run (cuda/device_choice.h);
+    // cpu by default, so a bake's bytes do not depend on the machine.
+    cuda::DeviceChoice device = cuda::DeviceChoice::Cpu;
 };
 
 const SettingsTable<BakeSettings>& bakeSettingsTable();

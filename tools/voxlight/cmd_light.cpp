@@ -5,6 +5,8 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "cuda/device_choice.h"
+#include "cuda/launchers.h"
 #include "lighting/lighting.h"
 #include "scene/gltf_loader.h"
 #include "voxel/vdb_file.h"
@@ -12,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <iostream>
 #include <memory>
 #include <sstream>
 #include <vector>
@@ -27,6 +30,7 @@ struct LightOptions {
     std::string normalWeights = toString(LightingSettings{}.normalWeights);
     std::string attenuation;
     std::vector<std::string> lightAttenuation;
+    std::string device = "cpu";
     int emitterStrata = LightingSettings{}.emitterStrata;
     int threads = 0;
     bool noHdda = false;
@@ -67,6 +71,8 @@ void runLight(const LightOptions& options) {
             parseCoefficients(entry.substr(eq + 1), "--light-attenuation " + entry.substr(0, eq));
     }
 
+    const bool onGpu = cuda::resolveDevice(cuda::parseDeviceChoice(options.device), std::cerr);
+
     const std::string output = options.output.empty()
         ? "output/" + std::filesystem::path(options.scene).stem().string() + "_lit.vdb"
         : options.output;
@@ -89,7 +95,7 @@ void runLight(const LightOptions& options) {
     LightingStats stats;
     {
         Progress progress("light", voxels.size(), options.quiet);
-        stats = lightVoxels(scene, voxels, settings, &progress);
+        stats = onGpu ? cuda::lightVoxelsCuda(scene, voxels, settings) : lightVoxels(scene, voxels, settings, &progress);
         progress.finish();
     }
     std::ostringstream note;
@@ -130,6 +136,9 @@ void addLightCommand(CLI::App& app) {
                     "n: n x n stratified points per emissive triangle (default 3)");
     cmd->add_flag("--no-hdda", options->noHdda, "step one voxel at a time instead of leaping empty nodes (same result)");
     cmd->add_option("--threads", options->threads, "worker threads (default: all cores)");
+    cmd->add_option("--device", options->device,
+                    "cpu | cuda | auto: auto takes the GPU when one is usable, else says why it runs on the CPU "
+                    "(default cpu)");
     cmd->add_flag("--strict", options->strict, "treat every warning as an error");
     cmd->add_flag("-q,--quiet", options->quiet, "no progress output");
     cmd->callback([options] { runLight(*options); });
