@@ -10,6 +10,8 @@
 #include "core/diagnostics.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "cuda/device_choice.h"
+#include "cuda/launchers.h"
 #include "scene/gltf_loader.h"
 #include "trace/bvh.h"
 #include "trace/camera.h"
@@ -24,6 +26,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <memory>
 
 namespace vl::cli {
@@ -49,6 +52,7 @@ struct ReferenceOptions {
     bool noLightmap = false;
     bool strict = false;
     bool quiet = false;
+    std::string device = "cpu";
 };
 
 using Clock = std::chrono::steady_clock;
@@ -96,6 +100,7 @@ void runReference(const ReferenceOptions& o) {
     else if (o.filter == "box") settings.filter = PixelFilter::Box;
     else throw SettingsError("filter: '" + o.filter + "' is not one of tent, box");
     settings.validate();
+    const bool onGpu = cuda::resolveDevice(cuda::parseDeviceChoice(o.device), std::cerr);
     PathTracerSettings lightmapSettings = settings;
     if (o.lightmapSpp < 0) throw SettingsError("lightmap-spp: " + std::to_string(o.lightmapSpp) + " is negative");
     if (o.lightmapSpp > 0) lightmapSettings.samplesPerPixel = o.lightmapSpp;
@@ -145,6 +150,7 @@ void runReference(const ReferenceOptions& o) {
     s["roulette_start"] = settings.path.rouletteStart;
     s["filter"] = o.filter;
     s["seed"] = settings.seed;
+    s["device"] = onGpu ? "cuda" : "cpu";
 
     if (!o.noRender) {
         Camera camera;
@@ -162,7 +168,8 @@ void runReference(const ReferenceOptions& o) {
         if (width == 0) width = std::max(1, static_cast<int>(std::lround(height * aspect)));
         if (height == 0) height = std::max(1, static_cast<int>(std::lround(width / aspect)));
         const CameraModel model = makeCameraModel(camera, width, height);
-        const TraceResult r = renderCamera(traceScene, bvh, model, settings);
+        const TraceResult r = onGpu ? cuda::renderCameraCuda(traceScene, bvh, model, settings)
+                                    : renderCamera(traceScene, bvh, model, settings);
         timings["render"] = r.seconds;
         t = Clock::now();
         writeWithPreview(r.beauty, outDir / "beauty.exr");
@@ -191,7 +198,8 @@ void runReference(const ReferenceOptions& o) {
         nlohmann::json maps = nlohmann::json::array();
         double lightmapSeconds = 0.0;
         for (const LightmapAtlas& atlas : atlases) {
-            const TraceResult r = traceIrradiance(traceScene, bvh, atlas.receivers, lightmapSettings);
+            const TraceResult r = onGpu ? cuda::traceIrradianceCuda(traceScene, bvh, atlas.receivers, lightmapSettings)
+                                        : traceIrradiance(traceScene, bvh, atlas.receivers, lightmapSettings);
             lightmapSeconds += r.seconds;
             const std::string stem = o.lightmapPerMesh ? "lightmap_" + fileSafe(atlas.name) : "lightmap";
             const nlohmann::json mean = meanRgb(r.beauty, &atlas.mask);
@@ -261,6 +269,9 @@ void addReferenceCommand(CLI::App& app) {
     cmd->add_flag("--no-lightmap", o->noLightmap, "skip the lightmap");
     cmd->add_flag("--strict", o->strict, "treat every warning as an error");
     cmd->add_flag("-q,--quiet", o->quiet, "no progress output");
+    cmd->add_option("--device", o->device,
+                    "cpu | cuda | auto: auto takes the GPU when one is usable, else says why it runs on the CPU "
+                    "(default cpu)");
     cmd->callback([o] { runReference(*o); });
 }
 
