@@ -4,6 +4,7 @@
 // array lengths the launchers copy. On a GPU machine: CPU and GPU agree on the Cornell box
 // within the tolerances written in cuda/launchers.h (these tests skip with a message
 // elsewhere).
+#include "bake/bake.h"
 #include "bake/receivers.h"
 #include "bake/shade_receivers.h"
 #include "cone/radiance_mips.h"
@@ -26,6 +27,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <iostream>
 #include <sstream>
 
 using namespace vl;
@@ -366,4 +368,75 @@ TEST_CASE("GPU path tracing agrees with the CPU on the Cornell reference", "[cud
     const SurfaceSampleSet& receivers = c.atlases.front().receivers;
     checkPathAgreement(cuda::traceIrradianceCuda(c.trace, c.bvh, receivers, settings),
                        traceIrradiance(c.trace, c.bvh, receivers, settings), "lightmap");
+}
+
+// ---- The bake's --device setting (bake.h) on a machine without a GPU. ----
+
+namespace {
+
+BakeSettings tinyBake(cuda::DeviceChoice device) {
+    BakeSettings settings;
+    settings.voxel.resolution = 16;
+    settings.lightmap.width = settings.lightmap.height = 16;
+    settings.outputs.images = false;
+    settings.outputs.grids = false;
+    settings.quiet = true;
+    settings.device = device;
+    return settings;
+}
+
+// Captures what a call writes to std::cerr.
+template <typename F>
+std::string stderrOf(F&& work) {
+    std::ostringstream captured;
+    std::streambuf* previous = std::cerr.rdbuf(captured.rdbuf());
+    try {
+        work();
+    } catch (...) {
+        std::cerr.rdbuf(previous);
+        throw;
+    }
+    std::cerr.rdbuf(previous);
+    return captured.str();
+}
+
+}  // namespace
+
+TEST_CASE("A bake with device auto and no GPU says why and gives the CPU bake", "[cuda]") {
+    const cuda::DeviceStatus status = cuda::probeDevice();
+    if (status.usable) {
+        WARN("skipped: this machine has a GPU (" << status.description << ")");
+        return;
+    }
+    const Cornell& c = cornell();
+    Diagnostics diagnostics(false, false);
+    BakeResult cpu = bake(c.scene, tinyBake(cuda::DeviceChoice::Cpu), diagnostics);
+    BakeResult fallback;
+    const std::string said =
+        stderrOf([&] { fallback = bake(c.scene, tinyBake(cuda::DeviceChoice::Auto), diagnostics); });
+    CHECK(said == "running on the CPU: " + status.description + "\n");
+    REQUIRE(cpu.lightmaps.size() == fallback.lightmaps.size());
+    REQUIRE_FALSE(cpu.lightmaps.empty());
+    for (size_t i = 0; i < cpu.lightmaps.size(); ++i) CHECK(sameBits(cpu.lightmaps[i].total, fallback.lightmaps[i].total));
+}
+
+TEST_CASE("A bake with device cuda and no GPU fails before any work with the reason", "[cuda]") {
+    const cuda::DeviceStatus status = cuda::probeDevice();
+    if (status.usable) {
+        WARN("skipped: this machine has a GPU (" << status.description << ")");
+        return;
+    }
+    Diagnostics diagnostics(false, false);
+    CHECK_THROWS_WITH(bake(cornell().scene, tinyBake(cuda::DeviceChoice::Cuda), diagnostics),
+                      "--device cuda: " + status.description);
+}
+
+TEST_CASE("The bake settings table takes device cpu, cuda and auto", "[cuda]") {
+    BakeSettings settings;
+    CHECK(settings.device == cuda::DeviceChoice::Cpu);
+    applySetting(bakeSettingsTable(), settings, "device", "auto");
+    CHECK(settings.device == cuda::DeviceChoice::Auto);
+    CHECK_THAT(describeBakeSettings(settings), Catch::Matchers::Contains("device=auto"));
+    CHECK_THROWS_WITH(applySetting(bakeSettingsTable(), settings, "device", "gpu"),
+                      Catch::Matchers::Contains("device 'gpu'"));
 }
