@@ -4,7 +4,8 @@ set -euo pipefail
 packages=(build-essential cmake ninja-build
   libopenvdb-dev libnanovdb-dev libboost-iostreams-dev libopenimageio-dev libtinygltf-dev
   libglm-dev libtbb-dev catch2 libcli11-dev nlohmann-json3-dev
-  python3-openvdb libbenchmark-dev libembree-dev)
+  python3-openvdb libbenchmark-dev libembree-dev
+  gnuplot-nox)  # voxlight bench draws its plot with gnuplot; the optional Cycles peer needs blender
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

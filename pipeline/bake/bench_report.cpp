@@ -1,0 +1,563 @@
+#include "bake/bench_report.h"
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/image_io.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <sstream>
+
+namespace vl {
+namespace fs = std::filesystem;
+
+namespace {
+
+// The methods in the order the table and the plot show them, with their plot colours.
+struct MethodStyle {
+    const char* method;
+    const char* title;
+    const char* colour;
+    int pointType;
+};
+const MethodStyle kMethods[] = {
+    {"vct", "voxlight VCT bake", "#d62728", 7},
+    {"path", "voxlight path tracer", "#1f77b4", 5},
+    {"cycles", "Cycles (Blender, this run)", "#2ca02c", 9},
+    {"cycles-files", "Cycles (reference files, timings.json)", "#7f7f7f", 13},
+};
+
+std::string fmt(const char* format, double v) {
+    char text[64];
+    std::snprintf(text, sizeof text, format, v);
+    return text;
+}
+
+std::string pct(const BenchError& e) { return e.available ? fmt("%.1f%%", 100.0 * e.metrics.relativeRmse) : "—"; }
+std::string secs(double s) { return s > 0.0 ? fmt(s < 10.0 ? "%.2f" : "%.1f", s) : "—"; }
+
+std::string settingsText(const BenchPointSpec& spec) {
+    std::string out;
+    for (const auto& [name, value] : spec.settings) out += (out.empty() ? "" : ";") + name + "=" + value;
+    if (spec.spp > 0) out += (out.empty() ? "" : ";") + std::string("spp=") + std::to_string(spec.spp);
+    return out;
+}
+
+std::string csvField(const std::string& s) {
+    if (s.find_first_of(",\"\n") == std::string::npos) return s;
+    std::string out = "\"";
+    for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return out + "\"";
+}
+
+std::string number(double v) {
+    char text[40];
+    std::snprintf(text, sizeof text, "%.6g", v);
+    return text;
+}
+
+void writeText(const fs::path& path, const std::string& text) {
+    writeAtomically(path.string(), [&](const std::string& temp) {
+        std::ofstream out(temp);
+        out << text;
+        if (!out) throw Error("cannot write " + temp);
+    });
+}
+
+using Series = std::vector<std::pair<double, double>>;
+
+// (time, relRMSE) of a method's points that measured both.
+Series series(const BenchResult& r, const std::string& method, bool image, std::vector<size_t>* indices = nullptr) {
+    Series s;
+    for (size_t i = 0; i < r.points.size(); ++i) {
+        const BenchPointResult& p = r.points[i];
+        const double t = image ? p.imageSeconds : p.lightmapSeconds;
+        const BenchError& e = image ? p.image : p.lightmap;
+        if (p.spec.method != method || !p.ok || !(t > 0.0) || !e.available) continue;
+        s.push_back({t, e.metrics.relativeRmse});
+        if (indices) indices->push_back(i);
+    }
+    return s;
+}
+
+const BenchPointResult* findPoint(const BenchResult& r, const std::string& method, const std::string& label) {
+    for (const BenchPointResult& p : r.points)
+        if (p.spec.method == method && p.spec.label == label && p.ok) return &p;
+    return nullptr;
+}
+
+// ---- CSV / JSON ----
+
+void writeCsv(BenchResult& r) {
+    std::ostringstream out;
+    const auto& columns = benchCsvColumns();
+    for (size_t i = 0; i < columns.size(); ++i) out << (i ? "," : "") << columns[i];
+    out << '\n';
+    std::map<std::pair<std::string, bool>, std::vector<size_t>> fronts;
+    for (const MethodStyle& m : kMethods)
+        for (bool image : {false, true}) {
+            std::vector<size_t> idx;
+            const Series s = series(r, m.method, image, &idx);
+            for (size_t f : paretoFront(s)) fronts[{m.method, image}].push_back(idx[f]);
+        }
+    auto onFront = [&](size_t i, bool image) {
+        const auto& v = fronts[{r.points[i].spec.method, image}];
+        return std::find(v.begin(), v.end(), i) != v.end();
+    };
+    for (size_t i = 0; i < r.points.size(); ++i) {
+        const BenchPointResult& p = r.points[i];
+        std::vector<std::string> f;
+        f.push_back(csvField(p.spec.method));
+        f.push_back(csvField(p.spec.label));
+        f.push_back(csvField(settingsText(p.spec)));
+        f.push_back(p.ok ? "1" : "0");
+        f.push_back(std::to_string(std::max(p.lightmapRuns.size(), p.imageRuns.size())));
+        f.push_back(p.lightmapSeconds > 0 ? number(p.lightmapSeconds) : "");
+        f.push_back(p.imageSeconds > 0 ? number(p.imageSeconds) : "");
+        f.push_back(p.cpuSeconds > 0 ? number(p.cpuSeconds) : "");
+        f.push_back(p.peakMemoryBytes > 0 ? number(p.peakMemoryBytes / 1048576.0) : "");
+        for (const BenchError* e : {&p.lightmap, &p.lightmapIndirect, &p.image, &p.imageIndirect}) {
+            f.push_back(e->available ? number(e->metrics.relativeRmse) : "");
+            f.push_back(e->available ? number(e->metrics.relMse) : "");
+            f.push_back(e->available ? number(e->metrics.smape) : "");
+        }
+        f.push_back(onFront(i, false) ? "1" : "0");
+        f.push_back(onFront(i, true) ? "1" : "0");
+        for (size_t k = 0; k < f.size(); ++k) out << (k ? "," : "") << f[k];
+        out << '\n';
+    }
+    writeText(fs::path(r.outputDir) / "bench.csv", out.str());
+    r.files.push_back("bench.csv");
+}
+
+nlohmann::json errorJson(const BenchError& e) {
+    if (!e.available) return nullptr;
+    return {{"relative_rmse", e.metrics.relativeRmse}, {"rel_mse", e.metrics.relMse}, {"smape", e.metrics.smape},
+            {"rmse", e.metrics.rmse}, {"pixels", e.metrics.pixels},
+            {"mean_test", {e.metrics.meanTest[0], e.metrics.meanTest[1], e.metrics.meanTest[2]}},
+            {"mean_reference", {e.metrics.meanReference[0], e.metrics.meanReference[1], e.metrics.meanReference[2]}}};
+}
+
+nlohmann::json nanToNull(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+void writeJson(BenchResult& r, const nlohmann::json& headline) {
+    nlohmann::json j;
+    j["scene"] = r.scenePath;
+    j["tool_version"] = VOXLIGHT_VERSION;
+    j["threads"] = r.threads;
+    j["repeats"] = r.repeats;
+    j["reference"] = {{"description", r.reference.description},
+                      {"lightmap_noise", nanToNull(r.reference.lightmapNoise)},
+                      {"image_noise", nanToNull(r.reference.imageNoise)},
+                      {"lightmap_spp", r.reference.lightmapSpp},
+                      {"image_spp", r.reference.imageSpp}};
+    j["notes"] = r.notes;
+    j["headline"] = headline;
+    nlohmann::json points = nlohmann::json::array();
+    for (const BenchPointResult& p : r.points) {
+        nlohmann::json settings = nlohmann::json::object();
+        for (const auto& [name, value] : p.spec.settings) settings[name] = value;
+        points.push_back({{"method", p.spec.method}, {"label", p.spec.label}, {"settings", settings}, {"spp", p.spec.spp},
+                          {"ok", p.ok}, {"error", p.error}, {"note", p.note},
+                          {"lightmap_seconds", p.lightmapSeconds}, {"image_seconds", p.imageSeconds},
+                          {"cpu_seconds", p.cpuSeconds}, {"lightmap_runs", p.lightmapRuns}, {"image_runs", p.imageRuns},
+                          {"cpu_runs", p.cpuRuns}, {"peak_memory_bytes", p.peakMemoryBytes},
+                          {"lightmap", errorJson(p.lightmap)}, {"lightmap_indirect", errorJson(p.lightmapIndirect)},
+                          {"image", errorJson(p.image)}, {"image_indirect", errorJson(p.imageIndirect)},
+                          {"outputs", p.outputDir}});
+    }
+    j["points"] = points;
+    writeText(fs::path(r.outputDir) / "bench.json", j.dump(2) + "\n");
+    r.files.push_back("bench.json");
+}
+
+// ---- heat maps ----
+
+// A perceptual ramp (inferno's anchors) in sRGB, 0 → 1.
+vec3 ramp(float t) {
+    static const vec3 anchors[] = {{0.0f, 0.0f, 0.016f}, {0.34f, 0.04f, 0.43f}, {0.73f, 0.21f, 0.33f},
+                                   {0.98f, 0.55f, 0.04f}, {0.99f, 1.0f, 0.64f}};
+    t = std::clamp(t, 0.0f, 1.0f) * 4.0f;
+    const int i = std::min(3, static_cast<int>(t));
+    return glm::mix(anchors[i], anchors[i + 1], t - static_cast<float>(i));
+}
+
+constexpr float kHeatScale = 0.5f;  // the PNG's full scale: 50% relative error
+
+// Per-pixel |test − reference| (mean over RGB) / mean reference over the compared pixels.
+void writeHeatMap(const Image& test, const Image& reference, const Image& mask, const fs::path& stem) {
+    double mean = 0.0;
+    size_t n = 0;
+    for (int y = 0; y < reference.height; ++y)
+        for (int x = 0; x < reference.width; ++x)
+            if (mask.at(x, y) > 0.5f) {
+                for (int c = 0; c < 3; ++c) mean += reference.at(x, y, std::min(c, reference.channels - 1));
+                n += 3;
+            }
+    if (n == 0 || mean <= 0.0) return;
+    mean /= static_cast<double>(n);
+    Image error(reference.width, reference.height, 1), colour(reference.width, reference.height, 3);
+    for (int y = 0; y < reference.height; ++y)
+        for (int x = 0; x < reference.width; ++x) {
+            if (!(mask.at(x, y) > 0.5f)) {
+                colour.setRgb(x, y, vec3(srgbToLinear(0.25f)));  // not compared: grey
+                continue;
+            }
+            double d = 0.0;
+            for (int c = 0; c < 3; ++c)
+                d += std::abs(test.at(x, y, std::min(c, test.channels - 1)) - reference.at(x, y, std::min(c, reference.channels - 1)));
+            const float e = static_cast<float>(d / 3.0 / mean);
+            error.at(x, y) = e;
+            const vec3 srgb = ramp(e / kHeatScale);
+            colour.setRgb(x, y, vec3(srgbToLinear(srgb.x), srgbToLinear(srgb.y), srgbToLinear(srgb.z)));
+        }
+    writeExr(error, stem.string() + ".exr", {"Y"});
+    writePngSrgb(colour, stem.string() + ".png");
+}
+
+struct HeatMap {
+    std::string method, label, lightmapPng, imagePng;
+    std::string lightmapError, imageError;
+};
+
+std::vector<HeatMap> writeHeatMaps(BenchResult& r, float excludeAbove) {
+    std::vector<HeatMap> maps;
+    const BenchPointResult* vct = findPoint(r, "vct", "default");
+    if (!vct || !vct->lightmap.available) return maps;
+    std::vector<const BenchPointResult*> chosen{vct};
+    for (const MethodStyle& m : kMethods) {
+        if (std::string(m.method) == "vct") continue;
+        const BenchPointResult* best = nullptr;
+        for (const BenchPointResult& p : r.points)
+            if (p.spec.method == m.method && p.ok && p.lightmap.available &&
+                (!best || std::abs(std::log(p.lightmap.metrics.relativeRmse / vct->lightmap.metrics.relativeRmse)) <
+                              std::abs(std::log(best->lightmap.metrics.relativeRmse / vct->lightmap.metrics.relativeRmse))))
+                best = &p;
+        if (best) chosen.push_back(best);
+    }
+    const fs::path dir = fs::path(r.outputDir) / "heatmaps";
+    fs::create_directories(dir);
+    for (const BenchPointResult* p : chosen) {
+        HeatMap h{p->spec.method, p->spec.label, "", "", pct(p->lightmap), pct(p->image)};
+        std::string stem = p->spec.method + "-" + p->spec.label;
+        for (char& c : stem)
+            if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '.') c = '_';
+        const fs::path base = fs::path(p->outputDir).is_absolute() ? fs::path(p->outputDir) : fs::path(r.outputDir) / p->outputDir;
+        auto find = [&](const std::vector<std::string>& names) -> std::string {
+            for (const std::string& n : names)
+                if (!n.empty() && fs::exists(base / n)) return (base / n).string();
+            return "";
+        };
+        const std::string n = std::to_string(p->spec.spp) + "spp";
+        const std::string sceneStem = fs::path(r.scenePath).stem().string();
+        const std::string lightmap = find({"lightmap.exr", sceneStem + "_lightmap_" + n + ".exr"});
+        const std::string image = find({"image.exr", sceneStem + "_render_" + n + ".exr"});
+        if (!lightmap.empty() && r.reference.hasLightmap) {
+            writeHeatMap(readImage(lightmap), r.reference.lightmap, r.reference.mask, dir / (stem + "_lightmap"));
+            h.lightmapPng = "heatmaps/" + stem + "_lightmap.png";
+            r.files.push_back(h.lightmapPng);
+        }
+        if (!image.empty() && r.reference.hasImage && p->image.available) {
+            Image mask(r.reference.image.width, r.reference.image.height, 1, 1.0f);
+            for (int y = 0; y < mask.height; ++y)
+                for (int x = 0; x < mask.width; ++x)
+                    for (int c = 0; c < std::min(3, r.reference.image.channels); ++c)
+                        if (excludeAbove > 0.0f && r.reference.image.at(x, y, c) > excludeAbove) mask.at(x, y) = 0.0f;
+            writeHeatMap(readImage(image), r.reference.image, mask, dir / (stem + "_image"));
+            h.imagePng = "heatmaps/" + stem + "_image.png";
+            r.files.push_back(h.imagePng);
+        }
+        maps.push_back(h);
+    }
+    return maps;
+}
+
+// ---- plot ----
+
+bool haveProgram(const std::string& name) {
+    return std::system(("command -v " + name + " >/dev/null 2>&1").c_str()) == 0;
+}
+
+void writePlot(BenchResult& r, const BenchOptions& options) {
+    const fs::path dir = fs::path(r.outputDir) / "plot";
+    fs::create_directories(dir);
+    std::ostringstream gp;
+    gp << "# gnuplot script written by voxlight bench; run from " << r.outputDir << ": gnuplot plot/bench.gp\n";
+    gp << "set terminal pngcairo size 1500,620 font 'sans,10' noenhanced\nset output 'bench.png'\n";
+    gp << "set multiplot layout 1,2 title \"" << fs::path(r.scenePath).filename().string()
+       << ": wall time (median) against relative RMSE vs the reference; lines join each method's Pareto front\"\n";
+    gp << "set logscale xy\nset grid xtics ytics mxtics mytics lc rgb '#dddddd'\nset key top right box opaque\n";
+    gp << "set xlabel 'seconds (wall, this machine)'\nset ylabel 'relative RMSE (%)'\n";
+    for (bool image : {false, true}) {
+        gp << "set title '" << (image ? "camera image (emitter excluded)" : "lightmap (covered texels)") << "'\n";
+        std::vector<std::string> plots;
+        for (const MethodStyle& m : kMethods) {
+            std::vector<size_t> idx;
+            const Series s = series(r, m.method, image, &idx);
+            if (s.empty()) continue;
+            const std::string base = std::string(m.method) + (image ? "_image" : "_lightmap");
+            std::ostringstream data, front;
+            for (size_t i = 0; i < s.size(); ++i)
+                data << number(s[i].first) << ' ' << number(100.0 * s[i].second) << " \"" << r.points[idx[i]].spec.label << "\"\n";
+            for (size_t f : paretoFront(s)) front << number(s[f].first) << ' ' << number(100.0 * s[f].second) << '\n';
+            writeText(dir / (base + ".dat"), data.str());
+            writeText(dir / (base + "_pareto.dat"), front.str());
+            const std::string colour = std::string("lc rgb '") + m.colour + "'";
+            plots.push_back("'plot/" + base + "_pareto.dat' u 1:2 w l lw 2 " + colour + " notitle");
+            plots.push_back("'plot/" + base + ".dat' u 1:2 w p pt " + std::to_string(m.pointType) + " ps 1.3 " + colour +
+                            " title '" + m.title + "'");
+            if (std::string(m.method) != "cycles-files")
+                plots.push_back("'plot/" + base + ".dat' u 1:2:3 w labels left offset 0.7,0.4 font ',7' tc rgb '" + m.colour +
+                                "' notitle");
+        }
+        if (plots.empty()) {
+            gp << "set label 1 'no points' at graph 0.5,0.5 center\nplot [1:10] [1:10] NaN notitle\nunset label 1\n";
+            continue;
+        }
+        gp << "plot ";
+        for (size_t i = 0; i < plots.size(); ++i) gp << (i ? ", \\\n     " : "") << plots[i];
+        gp << "\n";
+    }
+    gp << "unset multiplot\n";
+    writeText(dir / "bench.gp", gp.str());
+    if (!options.plot) return;
+    if (!haveProgram("gnuplot")) {
+        r.notes.push_back("no plot: gnuplot is not installed (Debian package gnuplot-nox; tools/install-deps.sh)");
+        return;
+    }
+    const std::string command = "cd '" + r.outputDir + "' && gnuplot plot/bench.gp > plot/gnuplot.log 2>&1";
+    if (std::system(command.c_str()) != 0 || !fs::exists(fs::path(r.outputDir) / "bench.png"))
+        r.notes.push_back("gnuplot failed: see " + (dir / "gnuplot.log").string());
+    else
+        r.files.push_back("bench.png");
+}
+
+// ---- headline and Markdown ----
+
+std::string reachText(const Reach& reach, double vctSeconds) {
+    if (!reach.found) return "—";
+    std::string s = secs(reach.seconds) + " s (" + fmt("%.1f×", reach.seconds / vctSeconds) + " the VCT time";
+    if (reach.how != "interpolated") s += "; " + reach.how;
+    return s + ")";
+}
+
+nlohmann::json headline(const BenchResult& r, std::string& markdown) {
+    nlohmann::json h;
+    const BenchPointResult* vct = findPoint(r, "vct", "default");
+    if (!vct || !vct->lightmap.available || !(vct->lightmapSeconds > 0.0)) return h;
+    const double e = vct->lightmap.metrics.relativeRmse, t = vct->lightmapSeconds;
+    h["vct_default"] = {{"lightmap_relative_rmse", e}, {"lightmap_seconds", t}, {"cpu_seconds", vct->cpuSeconds}};
+    std::ostringstream md;
+    md << "- **VCT default bake**: lightmap relative RMSE **" << pct(vct->lightmap) << "** in **" << secs(t)
+       << " s** (indirect part " << pct(vct->lightmapIndirect) << "; the whole bake with the " << pct(vct->image)
+       << " image: " << secs(vct->cpuSeconds) << " CPU s).\n";
+    for (const MethodStyle& m : kMethods) {
+        if (std::string(m.method) == "vct") continue;
+        const Series s = series(r, m.method, false);
+        if (s.empty()) continue;
+        const Reach same = timeToReach(s, e);
+        const Reach atTime = errorAtTime(s, t);
+        h[m.method] = {{"seconds_to_reach_vct_error", same.found ? nlohmann::json(same.seconds) : nlohmann::json(nullptr)},
+                       {"how", same.how},
+                       {"time_ratio", same.found ? nlohmann::json(same.seconds / t) : nlohmann::json(nullptr)},
+                       {"error_at_vct_time", atTime.found ? nlohmann::json(atTime.seconds) : nlohmann::json(nullptr)},
+                       {"error_at_vct_time_how", atTime.how}};
+        md << "- **" << m.title << "**: reaches " << pct(vct->lightmap) << " in " << reachText(same, t);
+        if (atTime.found)
+            md << "; at the VCT's " << secs(t) << " s its error is " << fmt("%.1f%%", 100.0 * atTime.seconds) << " ("
+               << fmt("%.1f×", atTime.seconds / e) << " the VCT's" << (atTime.how != "interpolated" ? "; " + atTime.how : "")
+               << ")";
+        md << ".\n";
+    }
+    markdown = md.str();
+    return h;
+}
+
+std::string table(const BenchResult& r, bool markdown) {
+    std::ostringstream out;
+    if (markdown) {
+        out << "| method | point | lightmap s | lightmap relRMSE | indirect relRMSE | image s | image relRMSE | CPU s | peak MB |\n";
+        out << "|---|---|---:|---:|---:|---:|---:|---:|---:|\n";
+    } else {
+        char line[256];
+        std::snprintf(line, sizeof line, "%-13s %-32s %9s %8s %8s %9s %8s %8s %8s\n", "method", "point", "lightmap", "error",
+                      "indirect", "image", "error", "CPU s", "peak MB");
+        out << line;
+    }
+    for (const MethodStyle& m : kMethods)
+        for (const BenchPointResult& p : r.points) {
+            if (p.spec.method != m.method) continue;
+            const std::string mem = p.peakMemoryBytes > 0 ? fmt("%.0f", p.peakMemoryBytes / 1048576.0) : "—";
+            if (!p.ok) {
+                if (markdown) out << "| " << p.spec.method << " | " << p.spec.label << " | failed: " << p.error << " ||||||\n";
+                else out << p.spec.method << " " << p.spec.label << " FAILED: " << p.error << '\n';
+                continue;
+            }
+            if (markdown) {
+                out << "| " << p.spec.method << " | " << p.spec.label << " | " << secs(p.lightmapSeconds) << " | " << pct(p.lightmap)
+                    << " | " << pct(p.lightmapIndirect) << " | " << secs(p.imageSeconds) << " | " << pct(p.image) << " | "
+                    << secs(p.cpuSeconds) << " | " << mem << " |\n";
+            } else {
+                char line[512];
+                std::snprintf(line, sizeof line, "%-13s %-32s %9s %8s %8s %9s %8s %8s %8s\n", p.spec.method.c_str(),
+                              p.spec.label.c_str(), secs(p.lightmapSeconds).c_str(), pct(p.lightmap).c_str(),
+                              pct(p.lightmapIndirect).c_str(), secs(p.imageSeconds).c_str(), pct(p.image).c_str(),
+                              secs(p.cpuSeconds).c_str(), mem.c_str());
+                out << line;
+            }
+        }
+    return out.str();
+}
+
+void writeMarkdown(BenchResult& r, const BenchOptions& options, const std::string& headlineText,
+                   const std::vector<HeatMap>& maps) {
+    std::ostringstream md;
+    md << "## Speed against error\n\n";
+    md << "Scene `" << fs::path(r.scenePath).filename().string() << "`, lightmap " << options.base.settings.lightmap.width
+       << "², image " << options.base.settings.imageWidth << "×" << options.base.settings.imageHeight << ", on this machine's "
+       << r.threads << " threads; every time is the median of " << r.repeats
+       << " runs in one process (a run over " << fmt("%.0f", options.repeatLimitSeconds) << " s is timed once). Reference: "
+       << r.reference.description << ". Errors are relative RMSE (RMSE / mean, RGB pooled) over the lightmap's covered "
+          "texels and the image's pixels (the emitter, reference > "
+       << fmt("%g", options.imageExcludeAbove) << ", excluded); bench.csv also has relMSE (ε = 10⁻²) and SMAPE.\n\n";
+    if (!headlineText.empty()) md << headlineText << '\n';
+    if (std::find(r.files.begin(), r.files.end(), "bench.png") != r.files.end())
+        md << "![wall time against relative RMSE, log axes](bench.png)\n\n";
+    md << table(r, true) << '\n';
+    md << "VCT times are the whole bake (load, voxelize, voxel light, bounces, mips, BVH, receivers, shading, EXR "
+          "writes) without the other output's stage; the path tracer's are load, BVH, receivers and tracing. CPU s is "
+          "the process CPU time of everything a point made (lightmap and image); the machine is shared, so wall time "
+          "also carries other people's load.\n\n";
+    if (!maps.empty()) {
+        md << "Error heat maps (|test − reference| / mean reference; black 0, yellow ≥ "
+           << fmt("%.0f%%", 100.0 * kHeatScale) << "; grey: not compared):\n\n";
+        md << "| point | lightmap | image |\n|---|---|---|\n";
+        for (const HeatMap& h : maps)
+            md << "| " << h.method << " " << h.label << " (" << h.lightmapError << " / " << h.imageError << ") | "
+               << (h.lightmapPng.empty() ? "—" : "![](" + h.lightmapPng + ")") << " | "
+               << (h.imagePng.empty() ? "—" : "![](" + h.imagePng + ")") << " |\n";
+        md << '\n';
+    }
+    for (const std::string& note : r.notes) md << "- " << note << '\n';
+    if (!r.notes.empty()) md << '\n';
+    if (!options.commandLine.empty()) md << "Regenerate with `" << options.commandLine << "`.\n";
+    writeText(fs::path(r.outputDir) / "bench.md", md.str());
+    r.files.push_back("bench.md");
+}
+
+}  // namespace
+
+const std::vector<std::string>& benchCsvColumns() {
+    static const std::vector<std::string> columns = {
+        "method", "label", "settings", "ok", "runs", "lightmap_seconds", "image_seconds", "cpu_seconds", "peak_memory_mb",
+        "lightmap_relrmse", "lightmap_relmse", "lightmap_smape",
+        "lightmap_indirect_relrmse", "lightmap_indirect_relmse", "lightmap_indirect_smape",
+        "image_relrmse", "image_relmse", "image_smape",
+        "image_indirect_relrmse", "image_indirect_relmse", "image_indirect_smape",
+        "lightmap_pareto", "image_pareto"};
+    return columns;
+}
+
+std::vector<size_t> paretoFront(const std::vector<std::pair<double, double>>& timeError) {
+    std::vector<size_t> order(timeError.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+        return timeError[a].first != timeError[b].first ? timeError[a].first < timeError[b].first
+                                                        : timeError[a].second < timeError[b].second;
+    });
+    std::vector<size_t> front;
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t i : order)
+        if (timeError[i].second < best) {
+            front.push_back(i);
+            best = timeError[i].second;
+        }
+    return front;
+}
+
+namespace {
+
+// Along the front (time up, error down): x → y on log-log axes; `xIsError` picks the direction.
+Reach interpolateFront(const Series& s, double x, bool xIsError) {
+    Reach reach;
+    const std::vector<size_t> front = paretoFront(s);
+    if (front.empty() || !(x > 0.0)) return reach;
+    auto X = [&](size_t i) { return xIsError ? s[front[i]].second : s[front[i]].first; };
+    auto Y = [&](size_t i) { return xIsError ? s[front[i]].first : s[front[i]].second; };
+    reach.found = true;
+    const size_t last = front.size() - 1;
+    // Errors fall along the front, times rise: orient so X increases with i.
+    const bool increasing = !xIsError;
+    const double lo = increasing ? X(0) : X(last), hi = increasing ? X(last) : X(0);
+    if (x >= lo && x <= hi && front.size() > 1) {
+        for (size_t i = 0; i < last; ++i) {
+            const double a = X(i), b = X(i + 1);
+            if ((x - a) * (x - b) <= 0.0) {
+                const double f = a == b ? 0.0 : std::log(x / a) / std::log(b / a);
+                reach.seconds = std::exp(std::log(Y(i)) + f * std::log(Y(i + 1) / Y(i)));
+                reach.how = "interpolated";
+                return reach;
+            }
+        }
+    }
+    if (front.size() == 1 && x == X(0)) {
+        reach.seconds = Y(0);
+        reach.how = "interpolated";
+        return reach;
+    }
+    if (xIsError) {
+        if (x < X(last)) {  // better than its best point: Monte Carlo rate
+            reach.seconds = Y(last) * std::pow(X(last) / x, 2.0);
+            reach.how = "extrapolated (error ∝ 1/√time)";
+        } else {
+            reach.seconds = Y(0);
+            reach.how = "at most (its fastest point is already better)";
+        }
+    } else {
+        if (x > X(last)) {
+            reach.seconds = Y(last) * std::sqrt(X(last) / x);
+            reach.how = "extrapolated (error ∝ 1/√time)";
+        } else {
+            reach.seconds = Y(0) * std::sqrt(X(0) / x);
+            reach.how = "extrapolated below its fastest point (error ∝ 1/√time)";
+        }
+    }
+    return reach;
+}
+
+}  // namespace
+
+Reach timeToReach(std::vector<std::pair<double, double>> timeError, double error) {
+    return interpolateFront(timeError, error, true);
+}
+
+Reach errorAtTime(std::vector<std::pair<double, double>> timeError, double seconds) {
+    return interpolateFront(timeError, seconds, false);
+}
+
+void writeBenchOutputs(BenchResult& result, const BenchOptions& options) {
+    writeCsv(result);
+    std::string headlineText;
+    const nlohmann::json h = headline(result, headlineText);
+    const std::vector<HeatMap> maps = writeHeatMaps(result, options.imageExcludeAbove);
+    writePlot(result, options);
+    writeJson(result, h);
+    writeMarkdown(result, options, headlineText, maps);
+    if (!options.quiet) {
+        std::printf("%s", table(result, false).c_str());
+        if (!headlineText.empty()) std::printf("\n%s", headlineText.c_str());
+        for (const std::string& note : result.notes) std::printf("note: %s\n", note.c_str());
+        std::printf("wrote %s/{bench.csv, bench.json, bench.md%s}\n", result.outputDir.c_str(),
+                    std::find(result.files.begin(), result.files.end(), "bench.png") != result.files.end() ? ", bench.png" : "");
+    }
+}
+
+}  // namespace vl

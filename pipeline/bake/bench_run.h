@@ -1,0 +1,89 @@
+// voxlight bench: speed against error. For one scene it sweeps the bake's settings (VCT)
+// and the path tracer's spp (and Cycles' spp when Blender is on the PATH), times every
+// point in this one process (median of repeats), measures its peak memory and its error
+// against one reference (bench_reference.h) on the lightmap's covered texels and on the
+// image, total and indirect, and writes bench.csv, bench.json, a time-against-error plot,
+// error heat maps and a Markdown report (bench_report.h).
+//
+// Times: a VCT point runs the whole bake (load, voxelize, voxel light, bounces, mips, BVH,
+// receivers, shading, EXR writes; no grids file); its lightmap time is the bake without the
+// image stage and its image time the bake without the lightmap stage. A path-tracer point
+// times load + BVH + receivers + tracing the same way.
+#pragma once
+
+#include "bake/bake_job.h"
+#include "bake/bench_reference.h"
+#include "metrics/metrics.h"
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace vl {
+
+struct BenchPointSpec {
+    std::string method;  // "vct", "path", "cycles"
+    std::string label;   // unique within its method: "default", "resolution=64", "spp=64"
+    std::vector<std::pair<std::string, std::string>> settings;  // vct: bake settings over the base job's
+    int spp = 0;                                                 // path, cycles
+};
+
+struct BenchError {
+    bool available = false;
+    ErrorMetrics metrics;
+};
+
+struct BenchPointResult {
+    BenchPointSpec spec;
+    bool ok = false;
+    std::string error;                      // why the point failed, when !ok
+    std::vector<double> lightmapRuns;       // seconds, one per repeat
+    std::vector<double> imageRuns;
+    double lightmapSeconds = 0.0;           // medians; 0 when not measured
+    double imageSeconds = 0.0;
+    std::vector<double> cpuRuns;            // process CPU seconds (all threads) of everything the point made
+    double cpuSeconds = 0.0;                // median; the shared machine is oversubscribed, so wall ≥ CPU / threads
+    double peakMemoryBytes = 0.0;           // the process's resident high-water mark during the point
+    BenchError lightmap, lightmapIndirect, image, imageIndirect;
+    std::string outputDir;                  // its outputs, relative to the bench folder
+    std::string note;                       // e.g. where a time came from
+};
+
+struct BenchOptions {
+    BakeJob base;                       // scene, base settings, added lights; outputDir = the bench folder
+    std::vector<BenchPointSpec> points; // empty: benchSweep(full)
+    bool full = false;
+    int repeats = 3;
+    double repeatLimitSeconds = 30.0;   // a point whose first run takes longer is timed once
+    BenchReferenceFiles reference;      // user-named; what is missing is path-traced
+    BenchReferenceSettings referenceSettings;
+    float imageExcludeAbove = 5.0f;     // image pixels whose reference exceeds this (the emitter) are left out
+    std::string blender;                // "" = look on the PATH; "none" = no Cycles peer
+    std::string cyclesScript;           // tools/bench/cycles_bake.py
+    std::vector<int> cyclesSpp = {16, 64, 256};
+    // Precomputed Cycles results (lower-spp files of ../shared/reference with their timings),
+    // added as method "cycles-files" points.
+    std::string cyclesFilesDir;
+    bool plot = true;
+    bool quiet = false;
+    std::string commandLine;  // how to regenerate the run, quoted in the report
+};
+
+struct BenchResult {
+    std::string scenePath;
+    std::string outputDir;
+    BenchReference reference;  // images dropped after the run; description and noise kept
+    std::vector<BenchPointResult> points;
+    std::vector<std::string> notes;  // what was skipped and why (no Blender, no gnuplot, …)
+    std::vector<std::string> files;  // written, relative to outputDir
+    int threads = 0;
+    int repeats = 0;
+};
+
+// The default sweep (VCT default, one setting varied at a time; path tracer 16..256 spp), or
+// the full one (more values per setting, path tracer to 1024 spp).
+std::vector<BenchPointSpec> benchSweep(bool full);
+
+BenchResult runBench(const BenchOptions& options);
+
+}  // namespace vl

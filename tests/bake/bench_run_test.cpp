@@ -1,0 +1,195 @@
+// voxlight bench: a tiny run end to end (its CSV has the declared columns and finite values),
+// the path-traced reference's cache key, and the time-to-reach interpolation on hand-made
+// fronts. The metrics themselves are tested in tests/metrics.
+#include "bake/bench_reference.h"
+#include "bake/bench_report.h"
+#include "bake/bench_run.h"
+#include "core/error.h"
+#include "support/paths.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+using namespace vl;
+namespace fs = std::filesystem;
+
+namespace {
+
+BakeJob tinyJob(const std::string& output) {
+    BakeJob job;
+    job.scenePath = test::sourceDir() + "/scenes/cornell_box.gltf";
+    job.outputDir = output;
+    for (const auto& [name, value] : std::vector<std::pair<std::string, std::string>>{
+             {"resolution", "16"}, {"lightmap-res", "32"}, {"lightmap-subsamples", "2"}, {"width", "24"},
+             {"height", "24"}, {"image-subsamples", "1"}, {"emitter-strata", "2"}, {"voxel-emitter-strata", "1"}})
+        applySetting(bakeSettingsTable(), job.settings, name, value);
+    job.settings.quiet = true;
+    return job;
+}
+
+BenchReferenceSettings tinyReference(const std::string& cache) {
+    BenchReferenceSettings s;
+    s.targetNoise = 0.2;
+    s.pilotSpp = 4;
+    s.maxSpp = 64;
+    s.cacheDir = cache;
+    s.quiet = true;
+    return s;
+}
+
+std::vector<std::string> split(const std::string& line) {
+    std::vector<std::string> fields;
+    std::string field;
+    std::istringstream in(line);
+    while (std::getline(in, field, ',')) fields.push_back(field);
+    if (!line.empty() && line.back() == ',') fields.push_back("");
+    return fields;
+}
+
+std::string readText(const fs::path& path) {
+    std::ifstream in(path);
+    std::ostringstream out;
+    out << in.rdbuf();
+    return out.str();
+}
+
+}  // namespace
+
+TEST_CASE("A tiny bench run writes bench.csv with the declared columns and finite values", "[bake]") {
+    const std::string out = test::tempDir("bench_tiny");
+    fs::remove_all(out);
+    const std::string cache = test::tempDir("bench_tiny_cache");
+    fs::remove_all(cache);
+    BenchOptions options;
+    options.base = tinyJob(out);
+    options.points = {{"vct", "default", {}, 0}, {"vct", "cones=6", {{"cones", "6"}}, 0}, {"path", "spp=4", {}, 4}};
+    options.repeats = 2;
+    options.referenceSettings = tinyReference(cache);
+    options.blender = "none";
+    options.plot = false;
+    options.quiet = true;
+    const BenchResult result = runBench(options);
+
+    REQUIRE(result.points.size() == 3);
+    for (const BenchPointResult& p : result.points) {
+        INFO(p.spec.method << " " << p.spec.label << ": " << p.error);
+        CHECK(p.ok);
+    }
+    CHECK(result.reference.hasLightmapIndirect);
+    CHECK(result.reference.hasImageIndirect);
+    CHECK(result.reference.lightmapSpp >= 4);
+    CHECK(result.reference.lightmapSpp % 4 == 0);  // a multiple of the 2 × 2 receiver samples of a texel
+
+    const std::vector<std::string> lines = [&] {
+        std::vector<std::string> v;
+        std::istringstream in(readText(fs::path(out) / "bench.csv"));
+        std::string line;
+        while (std::getline(in, line)) v.push_back(line);
+        return v;
+    }();
+    REQUIRE(lines.size() == 4);
+    CHECK(split(lines[0]) == benchCsvColumns());
+    const auto& columns = benchCsvColumns();
+    const auto column = [&](const std::string& name) {
+        return static_cast<size_t>(std::find(columns.begin(), columns.end(), name) - columns.begin());
+    };
+    for (size_t row = 1; row < lines.size(); ++row) {
+        const std::vector<std::string> f = split(lines[row]);
+        INFO(lines[row]);
+        REQUIRE(f.size() == columns.size());
+        CHECK(f[column("ok")] == "1");
+        // Every number from the times to the last error: present, finite and non-negative.
+        for (size_t c = column("lightmap_seconds"); c <= column("image_indirect_smape"); ++c) {
+            INFO(columns[c]);
+            REQUIRE_FALSE(f[c].empty());
+            char* end = nullptr;
+            const double v = std::strtod(f[c].c_str(), &end);
+            CHECK(*end == '\0');
+            CHECK(std::isfinite(v));
+            CHECK(v >= 0.0);
+        }
+        // SMAPE is bounded by 1 by definition; relative RMSE of these bakes is far below 100%.
+        CHECK(std::strtod(f[column("lightmap_smape")].c_str(), nullptr) <= 1.0);
+        CHECK(std::strtod(f[column("lightmap_relrmse")].c_str(), nullptr) < 1.0);
+        CHECK(std::strtod(f[column("runs")].c_str(), nullptr) == 2.0);
+    }
+    for (const char* file : {"bench.json", "bench.md", "plot/bench.gp", "heatmaps/vct-default_lightmap.png"}) {
+        INFO(file);
+        CHECK(fs::exists(fs::path(out) / file));
+    }
+    CHECK(readText(fs::path(out) / "bench.md").find("| vct | cones=6 |") != std::string::npos);
+}
+
+TEST_CASE("A path-traced bench reference is cached under the content of the scene files", "[bake]") {
+    const fs::path dir = test::tempDir("bench_hash");
+    fs::remove_all(dir);
+    fs::create_directories(dir / "a");
+    fs::create_directories(dir / "b");
+    for (const char* f : {"cornell_box.gltf", "cornell_box.bin"}) {
+        fs::copy_file(test::sourceDir() + "/scenes/" + f, dir / "a" / f);
+        fs::copy_file(test::sourceDir() + "/scenes/" + f, dir / "b" / f);
+    }
+    const uint64_t a = hashSceneFiles((dir / "a/cornell_box.gltf").string());
+    CHECK(a == hashSceneFiles((dir / "b/cornell_box.gltf").string()));  // same content elsewhere
+    {
+        std::fstream bin(dir / "b/cornell_box.bin", std::ios::in | std::ios::out | std::ios::binary);
+        bin.seekp(100);
+        bin.put('\x7f');
+    }
+    CHECK(a != hashSceneFiles((dir / "b/cornell_box.gltf").string()));  // a buffer changed
+    CHECK_THROWS_AS(hashSceneFiles((dir / "missing.gltf").string()), InputError);
+
+    BakeJob job = tinyJob((dir / "out").string());
+    job.scenePath = (dir / "a/cornell_box.gltf").string();
+    const BenchReferenceSettings settings = tinyReference((dir / "cache").string());
+    const BenchReference first = prepareBenchReference(job, {}, settings);
+    CHECK_FALSE(first.fromCache);
+    const BenchReference second = prepareBenchReference(job, {}, settings);
+    CHECK(second.fromCache);
+    CHECK(second.cachePath == first.cachePath);
+    CHECK(second.lightmap.pixels == first.lightmap.pixels);
+    CHECK(second.image.pixels == first.image.pixels);
+    CHECK(second.lightmapSpp == first.lightmapSpp);
+    job.settings.imageWidth = 20;  // another image size is another reference
+    CHECK_FALSE(prepareBenchReference(job, {}, settings).fromCache);
+}
+
+TEST_CASE("Bench time to reach an error follows the Pareto front on log-log axes", "[bake]") {
+    // (seconds, error); (8, 0.3) is dominated by (4, 0.2).
+    const std::vector<std::pair<double, double>> points = {{16, 0.1}, {1, 0.4}, {8, 0.3}, {4, 0.2}};
+    CHECK(paretoFront(points) == std::vector<size_t>{1, 3, 0});
+    CHECK(timeToReach(points, 0.2).seconds == Approx(4.0));
+    // Halfway in log error between (4, 0.2) and (16, 0.1) is halfway in log time: √(4·16) = 8.
+    CHECK(timeToReach(points, std::sqrt(0.2 * 0.1)).seconds == Approx(8.0));
+    CHECK(timeToReach(points, std::sqrt(0.2 * 0.1)).how == "interpolated");
+    // Below its best error: the Monte Carlo rate, 16 s · (0.1 / 0.05)² = 64 s.
+    CHECK(timeToReach(points, 0.05).seconds == Approx(64.0));
+    // Above its worst: its fastest point already does better.
+    CHECK(timeToReach(points, 0.5).seconds == Approx(1.0));
+    CHECK(errorAtTime(points, 8.0).seconds == Approx(std::sqrt(0.02)));
+    CHECK(errorAtTime(points, 64.0).seconds == Approx(0.05));
+    CHECK_FALSE(timeToReach({}, 0.1).found);
+}
+
+TEST_CASE("Bench refuses bad repeats and reports a bad VCT setting as a failed point", "[bake]") {
+    BenchOptions options;
+    options.base = tinyJob(test::tempDir("bench_bad"));
+    options.repeats = 0;
+    CHECK_THROWS_AS(runBench(options), SettingsError);
+
+    options.repeats = 1;
+    options.points = {{"vct", "bad", {{"cones", "0"}}, 0}};
+    options.referenceSettings = tinyReference(test::tempDir("bench_tiny_cache"));
+    options.blender = "none";
+    options.plot = false;
+    options.quiet = true;
+    const BenchResult result = runBench(options);
+    REQUIRE(result.points.size() == 1);
+    CHECK_FALSE(result.points[0].ok);
+    CHECK(result.points[0].error.find("cones") != std::string::npos);
+}

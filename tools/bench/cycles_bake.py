@@ -1,0 +1,207 @@
+# The Cycles peer of `voxlight bench`: bakes a glTF scene's shared lightmap atlas
+# (TEXCOORD_1) with Cycles' DIFFUSE bake -- E/pi per texel, voxlight's lightmap convention --
+# and renders its first camera, at one sample count, timing each. Headless:
+#
+#   blender -b --factory-startup --python-exit-code 1 --python tools/bench/cycles_bake.py -- \
+#       --scene scene.gltf --out DIR --spp 64 [--lightmap-res 256] [--width 256 --height 256]
+#       [--no-lightmap] [--no-image] [--seed 1]
+#
+# Writes DIR/lightmap.exr, DIR/lightmap_direct.exr, DIR/image.exr (linear float) and
+# DIR/cycles.json (seconds of each bake and render, peak memory). Settings as the Cycles
+# references in ../shared/reference: CPU, 64 bounces of every kind, no clamping, no light
+# threshold, no adaptive sampling, no denoising, 1-pixel box filter, black world.
+#
+# Lessons from Debian's Blender 3.4 (issue 6):
+# - it has no denoiser but enables denoising by default: turn it off;
+# - an indirect-only bake returns zero: bake direct+indirect and direct; the bench subtracts;
+# - image.save_render writes float EXR (plain save writes sRGB-encoded values);
+# - the glTF importer needs numpy.bool = bool with Debian's numpy;
+# - the importer makes Principled BSDFs, whose diffuse lobe at roughness 1 is not Lambert
+#   (its retro-reflection made the Cornell atlas's indirect light ~15% brighter than the
+#   reference, made with Lambert walls): opaque, non-metallic, non-emissive materials get a
+#   Diffuse BSDF (roughness 0: Lambert) with the same base colour, as voxlight models them.
+import argparse
+import json
+import os
+import resource
+import sys
+import time
+
+import numpy
+
+if not hasattr(numpy, "bool"):
+    numpy.bool = bool
+
+import bpy
+
+
+def parse_args():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    p = argparse.ArgumentParser(prog="cycles_bake.py")
+    p.add_argument("--scene", required=True)
+    p.add_argument("--out", required=True)
+    p.add_argument("--spp", type=int, default=64)
+    p.add_argument("--lightmap-res", type=int, default=256)
+    p.add_argument("--width", type=int, default=256)
+    p.add_argument("--height", type=int, default=256)
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--no-lightmap", action="store_true")
+    p.add_argument("--no-image", action="store_true")
+    return p.parse_args(argv)
+
+
+def set_if(obj, name, value):
+    if hasattr(obj, name):
+        setattr(obj, name, value)
+
+
+def configure(scene, args):
+    scene.render.engine = "CYCLES"
+    c = scene.cycles
+    c.device = "CPU"
+    c.samples = args.spp
+    c.seed = args.seed
+    set_if(c, "use_adaptive_sampling", False)
+    set_if(c, "use_denoising", False)
+    set_if(c, "use_preview_denoising", False)
+    for name in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
+                 "volume_bounces", "transparent_max_bounces"):
+        set_if(c, name, 64)
+    set_if(c, "sample_clamp_direct", 0.0)
+    set_if(c, "sample_clamp_indirect", 0.0)
+    set_if(c, "light_sampling_threshold", 0.0)
+    set_if(c, "pixel_filter_type", "BOX")
+    set_if(c, "filter_width", 1.0)
+    scene.view_settings.view_transform = "Standard"
+    scene.render.threads_mode = "AUTO"
+    world = bpy.data.worlds.new("black")
+    world.use_nodes = True
+    background = world.node_tree.nodes.get("Background")
+    if background is not None:
+        background.inputs[0].default_value = (0.0, 0.0, 0.0, 1.0)
+        background.inputs[1].default_value = 0.0
+    scene.world = world
+    settings = scene.render.image_settings
+    settings.file_format = "OPEN_EXR"
+    settings.color_depth = "32"
+    settings.color_mode = "RGB"
+
+
+def emits(material):
+    # voxlight does not bake emitter meshes (receivers.h); nor do we.
+    if material is None or not material.use_nodes:
+        return False
+    for node in material.node_tree.nodes:
+        if node.type == "BSDF_PRINCIPLED":
+            color = node.inputs["Emission"].default_value
+            strength = node.inputs["Emission Strength"].default_value if "Emission Strength" in node.inputs else 1.0
+            linked = node.inputs["Emission"].is_linked
+            if strength > 0.0 and (linked or max(color[0], color[1], color[2]) > 0.0):
+                return True
+        if node.type == "EMISSION":
+            return True
+    return False
+
+
+def make_lambert(material):
+    if material is None or not material.use_nodes or emits(material):
+        return False
+    nodes, links = material.node_tree.nodes, material.node_tree.links
+    principled = next((n for n in nodes if n.type == "BSDF_PRINCIPLED"), None)
+    output = next((n for n in nodes if n.type == "OUTPUT_MATERIAL"), None)
+    if principled is None or output is None:
+        return False
+    if principled.inputs["Metallic"].is_linked or principled.inputs["Metallic"].default_value > 0.0:
+        return False
+    if principled.inputs["Transmission"].is_linked or principled.inputs["Transmission"].default_value > 0.0:
+        return False
+    diffuse = nodes.new("ShaderNodeBsdfDiffuse")
+    diffuse.inputs["Roughness"].default_value = 0.0
+    base = principled.inputs["Base Color"]
+    if base.is_linked:
+        links.new(base.links[0].from_socket, diffuse.inputs["Color"])
+    else:
+        diffuse.inputs["Color"].default_value = base.default_value
+    links.new(diffuse.outputs["BSDF"], output.inputs["Surface"])
+    return True
+
+
+def bake_targets():
+    targets = []
+    for obj in bpy.context.scene.objects:
+        if obj.type != "MESH" or len(obj.data.uv_layers) < 2:
+            continue
+        if any(emits(slot.material) for slot in obj.material_slots):
+            continue
+        targets.append(obj)
+    return targets
+
+
+def bake_lightmap(scene, args, timings):
+    targets = bake_targets()
+    if not targets:
+        raise SystemExit("cycles_bake.py: no mesh with TEXCOORD_1 to bake")
+    image = bpy.data.images.new("lightmap", args.lightmap_res, args.lightmap_res, alpha=False, float_buffer=True)
+    image.colorspace_settings.name = "Linear"
+    for material in {slot.material for obj in targets for slot in obj.material_slots if slot.material}:
+        material.use_nodes = True
+        node = material.node_tree.nodes.new("ShaderNodeTexImage")
+        node.image = image
+        material.node_tree.nodes.active = node
+    bpy.ops.object.select_all(action="DESELECT")
+    for obj in targets:
+        obj.data.uv_layers.active_index = 1  # TEXCOORD_1: the lightmap set
+        obj.select_set(True)
+    bpy.context.view_layer.objects.active = targets[0]
+    bake = scene.render.bake
+    bake.use_pass_color = False
+    bake.margin = 0
+    bake.target = "IMAGE_TEXTURES"
+    for name, passes in (("lightmap", {"DIRECT", "INDIRECT"}), ("lightmap_direct", {"DIRECT"})):
+        start, cpu = time.perf_counter(), time.process_time()
+        bpy.ops.object.bake(type="DIFFUSE", pass_filter=passes, use_clear=True, margin=0)
+        timings[name + "_seconds"] = time.perf_counter() - start
+        timings[name + "_cpu_seconds"] = time.process_time() - cpu
+        image.save_render(os.path.join(args.out, name + ".exr"), scene=scene)
+
+
+def render_image(scene, args, timings):
+    cameras = [obj for obj in scene.objects if obj.type == "CAMERA"]
+    if not cameras:
+        raise SystemExit("cycles_bake.py: the scene has no camera")
+    scene.camera = cameras[0]
+    scene.render.resolution_x = args.width
+    scene.render.resolution_y = args.height
+    scene.render.resolution_percentage = 100
+    start, cpu = time.perf_counter(), time.process_time()
+    bpy.ops.render.render(write_still=False)
+    timings["image_seconds"] = time.perf_counter() - start
+    timings["image_cpu_seconds"] = time.process_time() - cpu
+    bpy.data.images["Render Result"].save_render(os.path.join(args.out, "image.exr"), scene=scene)
+
+
+def main():
+    args = parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    timings = {"spp": args.spp, "blender": bpy.app.version_string}
+    start = time.perf_counter()
+    bpy.ops.import_scene.gltf(filepath=args.scene)
+    timings["import_seconds"] = time.perf_counter() - start
+    scene = bpy.context.scene
+    configure(scene, args)
+    timings["lambert_materials"] = sorted(m.name for m in bpy.data.materials if make_lambert(m))
+    if not args.no_lightmap:
+        bake_lightmap(scene, args, timings)
+    if not args.no_image:
+        render_image(scene, args, timings)
+    # CPU of what a user would run: the total lightmap and the image (the direct bake only
+    # serves the bench's indirect figures).
+    timings["cpu_seconds"] = timings.get("lightmap_cpu_seconds", 0.0) + timings.get("image_cpu_seconds", 0.0)
+    timings["peak_memory_bytes"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    with open(os.path.join(args.out, "cycles.json.tmp"), "w") as out:
+        json.dump(timings, out, indent=2)
+    os.replace(os.path.join(args.out, "cycles.json.tmp"), os.path.join(args.out, "cycles.json"))
+
+
+main()
