@@ -61,7 +61,7 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.cone.stepFactor = static_cast<float>(parseRealSetting("step-factor", v, 0.05, 4)); }},
         {"cone-max-distance", "metres a cone marches at most; 0 = until opaque or out of the grid (default 0)",
          [](S& s, const std::string& v) { s.cone.maxDistance = static_cast<float>(parseRealSetting("cone-max-distance", v, 0, 1e9)); }},
-        {"bounces", "voxel-to-voxel bounces before the final gather (default 2)",
+        {"bounces", "voxel-to-voxel bounces before the final gather (default 4)",
          [](S& s, const std::string& v) { s.bounces = parseIntSetting("bounces", v, 0, 1024); }},
         // Receivers
         {"lightmap-res", "lightmap atlas width and height in texels (default 256)",

@@ -25,9 +25,9 @@ struct BakeSettings {
     LightingSettings lighting;
     ConeSettings cone;
     // Voxel-to-voxel bounces before the final gather (the receiver's gather is one more).
-    // 2: the lowest lightmap error on the Cycles Cornell box (relRMSE 12.5% vs 13.9% at 1 and
-    // 14.3% at 3: each gather still adds ~20% too much, see the closing notes of issue 5).
-    int bounces = 2;
+    // 4: the lowest lightmap error on the Cycles Cornell box (relRMSE 9.1%, against 10.0% at
+    // 2 and 9.5% at 8; `voxlight bench` regenerates the sweep).
+    int bounces = 4;
     LightmapSettings lightmap;
     DirectLightSettings direct;
     int imageWidth = 256;

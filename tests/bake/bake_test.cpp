@@ -84,10 +84,10 @@ TEST_CASE("The default bake of the Cycles Cornell box matches Cycles' 4096-spp l
     // (Cycles' 1024-spp lightmap shows 2.2% against the same reference).
     CHECK(direct.relativeRmse < 0.03);
     for (int c = 0; c < 3; ++c) CHECK(direct.meanTest[c] == Approx(direct.meanReference[c]).epsilon(0.005));
-    // Indirect light through cones: measured 12.5% relRMSE and channel means +2…7% at the
-    // default settings; the bounds leave room for platform rounding, not for a regression.
-    CHECK(total.relativeRmse < 0.14);
-    for (int c = 0; c < 3; ++c) CHECK(total.meanTest[c] == Approx(total.meanReference[c]).epsilon(0.08));
+    // Issue 5's bound on the total: 10% relative RMSE (measured 9.1% at the defaults, channel
+    // means +0.4…+3%).
+    CHECK(total.relativeRmse < 0.10);
+    for (int c = 0; c < 3; ++c) CHECK(total.meanTest[c] == Approx(total.meanReference[c]).epsilon(0.05));
 }
 
 TEST_CASE("Light does not leak through a wall between a lit and a dark room", "[bake]") {
