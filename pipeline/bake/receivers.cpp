@@ -216,7 +216,7 @@ std::vector<LightmapAtlas> buildLightmapReceivers(const Scene& scene, const Ligh
 }
 
 CameraReceivers buildCameraReceivers(const TraceScene& scene, const Bvh& bvh, const CameraModel& camera,
-                                     int subsamplesPerAxis) {
+                                     int subsamplesPerAxis, int emissionSubsamplesPerAxis) {
     if (subsamplesPerAxis < 1 || subsamplesPerAxis > 16)
         throw SettingsError("camera-subsamples: " + std::to_string(subsamplesPerAxis) + " is outside 1..16");
     const int W = camera.width, H = camera.height, n = subsamplesPerAxis;
@@ -258,6 +258,21 @@ CameraReceivers buildCameraReceivers(const TraceScene& scene, const Bvh& bvh, co
                         albedo += s.albedo * weight;
                         ++hits;
                     }
+                if (emissionSubsamplesPerAxis > n) {
+                    // Emitters seen directly need only primary rays: sample their edges finer
+                    // than the shading grid (a 2 × 2 grid turns a pixel a quarter covered by
+                    // a bright emitter into 0 or a half).
+                    const int ne = emissionSubsamplesPerAxis;
+                    emission = vec3(0.0f);
+                    for (int j = 0; j < ne; ++j)
+                        for (int i = 0; i < ne; ++i) {
+                            const Ray ray = pinholeRay(camera, vec2(x + (i + 0.5f) / ne, y + (j + 0.5f) / ne));
+                            Hit hit;
+                            if (intersectClosest(bv, ray, hit))
+                                emission += emissionAt(sv, surfaceAt(sv, hit.triangle, hit.b1, hit.b2), -ray.direction);
+                        }
+                    emission /= static_cast<float>(ne * ne);
+                }
                 counts.push_back(hits);
                 out.emission.setRgb(x, y, emission);
                 out.albedo.setRgb(x, y, albedo);

@@ -61,7 +61,9 @@ struct CameraReceivers {
     Image mask;                  // 1 channel: fraction of the pixel's rays that hit a surface
 };
 
+// emissionSubsamplesPerAxis > subsamplesPerAxis samples the directly seen emission on that
+// finer grid (primary rays only); otherwise emission uses the shading grid.
 CameraReceivers buildCameraReceivers(const TraceScene& scene, const Bvh& bvh, const CameraModel& camera,
-                                     int subsamplesPerAxis = 1);
+                                     int subsamplesPerAxis = 1, int emissionSubsamplesPerAxis = 0);
 
 }  // namespace vl
