@@ -344,7 +344,7 @@ void writePlot(BenchResult& r, const BenchOptions& options) {
 
 std::string reachText(const Reach& reach, double vctSeconds) {
     if (!reach.found) return "—";
-    std::string s = secs(reach.seconds) + " s (" + fmt("%.1f×", reach.seconds / vctSeconds) + " the VCT time";
+    std::string s = secs(reach.seconds) + " s (" + fmt("%.2g×", reach.seconds / vctSeconds) + " the VCT time";
     if (reach.how != "interpolated") s += "; " + reach.how;
     return s + ")";
 }
@@ -373,7 +373,7 @@ nlohmann::json headline(const BenchResult& r, std::string& markdown) {
         md << "- **" << m.title << "**: reaches " << pct(vct->lightmap) << " in " << reachText(same, t);
         if (atTime.found)
             md << "; at the VCT's " << secs(t) << " s its error is " << fmt("%.1f%%", 100.0 * atTime.seconds) << " ("
-               << fmt("%.1f×", atTime.seconds / e) << " the VCT's" << (atTime.how != "interpolated" ? "; " + atTime.how : "")
+               << fmt("%.2g×", atTime.seconds / e) << " the VCT's" << (atTime.how != "interpolated" ? "; " + atTime.how : "")
                << ")";
         md << ".\n";
     }

@@ -212,7 +212,7 @@ std::vector<BenchPointSpec> benchSweep(bool full) {
         vct("resolution=64 cones=6", {{"resolution", "64"}, {"cones", "6"}});
         vct("resolution=64 cones=6 step-factor=1", {{"resolution", "64"}, {"cones", "6"}, {"step-factor", "1"}});
     } else {
-        each("resolution", {"64", "256"});
+        each("resolution", {"64", "192"});
         each("cones", {"6"});
         each("step-factor", {"1"});
         each("normal-weights", {"lambert"});
@@ -244,7 +244,7 @@ BenchResult runBench(const BenchOptions& options) {
         std::fprintf(stderr, "bench: reference ready in %.1f s: %s\n", secondsSince(refStart), result.reference.description.c_str());
     const Comparer comparer{result.reference, result.reference.hasImage ? imageMask(result.reference.image, options.imageExcludeAbove) : Image()};
 
-    std::vector<BenchPointSpec> specs = options.points.empty() ? benchSweep(options.full) : options.points;
+    std::vector<BenchPointSpec> specs = options.points.empty() && !options.pointsGiven ? benchSweep(options.full) : options.points;
     const CyclesPeer peer = findCyclesPeer(options);
     if (!peer.available) result.notes.push_back(peer.why);
     else

@@ -51,7 +51,8 @@ struct BenchPointResult {
 
 struct BenchOptions {
     BakeJob base;                       // scene, base settings, added lights; outputDir = the bench folder
-    std::vector<BenchPointSpec> points; // empty: benchSweep(full)
+    std::vector<BenchPointSpec> points; // empty: benchSweep(full), unless pointsGiven
+    bool pointsGiven = false;           // points is the whole list even when empty (a Cycles-only run)
     bool full = false;
     int repeats = 3;
     double repeatLimitSeconds = 30.0;   // a point whose first run takes longer is timed once

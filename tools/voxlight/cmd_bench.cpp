@@ -8,6 +8,7 @@
 #include "bake/job_file.h"
 #include "core/error.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -38,6 +39,7 @@ struct BenchCliOptions {
     bool noCyclesFiles = false;
     bool noPlot = false;
     bool quiet = false;
+    std::vector<std::string> methods;  // empty = all
     std::string commandLine;
 };
 
@@ -126,6 +128,22 @@ BenchOptions plan(const BenchCliOptions& o) {
             for (const BenchPointSpec& p : sweep)
                 if (p.method == "path") options.points.push_back(p);
     }
+    if (!o.methods.empty()) {
+        for (const std::string& m : o.methods)
+            if (m != "vct" && m != "path" && m != "cycles")
+                throw SettingsError("methods: '" + m + "' is not one of vct, path, cycles");
+        const auto wanted = [&](const std::string& m) { return std::find(o.methods.begin(), o.methods.end(), m) != o.methods.end(); };
+        if (options.points.empty()) options.points = benchSweep(o.full);
+        std::vector<BenchPointSpec> kept;
+        for (const BenchPointSpec& p : options.points)
+            if (wanted(p.method)) kept.push_back(p);
+        options.points = kept;
+        options.pointsGiven = true;
+        if (!wanted("cycles")) {
+            options.blender = "none";
+            options.cyclesFilesDir.clear();
+        }
+    }
     return options;
 }
 
@@ -184,6 +202,7 @@ void addBenchCommand(CLI::App& app) {
     cmd->add_option("--blender", o->blender, "Blender executable for the Cycles peer (default: blender on the PATH; none = off)");
     cmd->add_option("--cycles-spp", o->cyclesSpp, "Cycles peer spp points (default 16 64 256)");
     cmd->add_flag("--no-cycles-files", o->noCyclesFiles, "leave out the precomputed lower-spp Cycles files");
+    cmd->add_option("--methods", o->methods, "only these methods: vct path cycles (default all)")->delimiter(',');
     cmd->add_flag("--no-plot", o->noPlot, "write the gnuplot script and data but do not run gnuplot");
     cmd->add_flag("-q,--quiet", o->quiet, "no progress or table output");
     for (const auto& spec : bakeSettingsTable()) {
