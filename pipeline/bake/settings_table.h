@@ -3,6 +3,8 @@
 // checked into the settings struct. A bad value is a SettingsError naming the setting.
 #pragma once
 
+#include "core/error.h"
+
 #include <functional>
 #include <string>
 #include <vector>
@@ -26,16 +28,7 @@ bool parseBoolSetting(const std::string& name, const std::string& value);
 // One of `choices`; returns its index.
 int parseChoiceSetting(const std::string& name, const std::string& value, const std::vector<std::string>& choices);
 
-template <typename Settings>
-void applySetting(const SettingsTable<Settings>& table, Settings& settings, const std::string& name,
-                  const std::string& value);
-
-}  // namespace vl
-
-#include "core/error.h"
-
-namespace vl {
-
+// Applies one named setting; an unknown name is a SettingsError listing the known ones.
 template <typename Settings>
 void applySetting(const SettingsTable<Settings>& table, Settings& settings, const std::string& name,
                   const std::string& value) {
