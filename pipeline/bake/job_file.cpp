@@ -100,31 +100,38 @@ std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& de
     const fs::path base = fs::path(path).parent_path();
     auto resolve = [&](const std::string& p) { return fs::path(p).is_absolute() ? p : (base / p).lexically_normal().string(); };
 
-    BakeSettings global = defaults;
-    if (root.contains("settings")) applySettings(global, root["settings"], path);
-    const std::string outputRoot = root.contains("output") ? resolve(root["output"].get<std::string>()) : defaultOutputRoot;
+    // A value of the wrong JSON type (a string where a number belongs) is the user's error:
+    // report it with the place it was found, not as an internal one.
+    std::string where = path;
+    try {
+        BakeSettings global = defaults;
+        if (root.contains("settings")) applySettings(global, root["settings"], path);
+        const std::string outputRoot = root.contains("output") ? resolve(root["output"].get<std::string>()) : defaultOutputRoot;
 
-    std::vector<BakeJob> jobs;
-    for (size_t i = 0; i < root["scenes"].size(); ++i) {
-        const json& entry = root["scenes"][i];
-        const std::string where = path + ": scenes[" + std::to_string(i) + "]";
-        if (!entry.is_object() || !entry.contains("path") || !entry["path"].is_string())
-            throw InputError(where + " needs a \"path\" string");
-        BakeJob job;
-        job.scenePath = resolve(entry["path"].get<std::string>());
-        job.settings = global;
-        if (entry.contains("settings")) applySettings(job.settings, entry["settings"], where);
-        const std::string name = entry.value("name", sceneOutputName(job.scenePath));
-        job.outputDir = entry.contains("output") ? resolve(entry["output"].get<std::string>())
-                                                 : (fs::path(outputRoot) / name).string();
-        if (entry.contains("lights")) {
-            if (!entry["lights"].is_array()) throw InputError(where + ": \"lights\" must be an array");
-            for (size_t l = 0; l < entry["lights"].size(); ++l)
-                job.addedLights.push_back(readLight(entry["lights"][l], where + ".lights[" + std::to_string(l) + "]"));
+        std::vector<BakeJob> jobs;
+        for (size_t i = 0; i < root["scenes"].size(); ++i) {
+            const json& entry = root["scenes"][i];
+            where = path + ": scenes[" + std::to_string(i) + "]";
+            if (!entry.is_object() || !entry.contains("path") || !entry["path"].is_string())
+                throw InputError(where + " needs a \"path\" string");
+            BakeJob job;
+            job.scenePath = resolve(entry["path"].get<std::string>());
+            job.settings = global;
+            if (entry.contains("settings")) applySettings(job.settings, entry["settings"], where);
+            const std::string name = entry.value("name", sceneOutputName(job.scenePath));
+            job.outputDir = entry.contains("output") ? resolve(entry["output"].get<std::string>())
+                                                     : (fs::path(outputRoot) / name).string();
+            if (entry.contains("lights")) {
+                if (!entry["lights"].is_array()) throw InputError(where + ": \"lights\" must be an array");
+                for (size_t l = 0; l < entry["lights"].size(); ++l)
+                    job.addedLights.push_back(readLight(entry["lights"][l], where + ".lights[" + std::to_string(l) + "]"));
+            }
+            jobs.push_back(std::move(job));
         }
-        jobs.push_back(std::move(job));
+        return jobs;
+    } catch (const json::exception& e) {
+        throw InputError(where + ": " + e.what());
     }
-    return jobs;
 }
 
 }  // namespace vl

@@ -280,6 +280,9 @@ TEST_CASE("Job files set settings globally and per scene and add lights", "[bake
     std::ofstream(dir / "bad.json") << R"({"scenes": [{"path": "a.gltf", "settings": {"cones": "x"}}]})";
     CHECK_THROWS_WITH(readJobFile((dir / "bad.json").string(), BakeSettings{}, "output"),
                       Catch::Contains("bad.json") && Catch::Contains("scenes[0]") && Catch::Contains("cones"));
+    std::ofstream(dir / "mistyped.json") << R"({"scenes": [{"path": "a.gltf", "lights": [{"position": [0, 1, 0], "intensity": "bright"}]}]})";
+    CHECK_THROWS_WITH(readJobFile((dir / "mistyped.json").string(), BakeSettings{}, "output"),
+                      Catch::Contains("mistyped.json") && Catch::Contains("scenes[0]") && Catch::Contains("number"));
     std::ofstream(dir / "broken.json") << "{ not json";
     CHECK_THROWS_WITH(readJobFile((dir / "broken.json").string(), BakeSettings{}, "output"),
                       Catch::Contains("broken.json") && Catch::Contains("not valid JSON"));
