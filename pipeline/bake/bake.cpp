@@ -91,7 +91,7 @@ void checkMemoryBudget(const Scene& scene, const BakeSettings& settings, double 
     // costs ~48 bytes, a texel or pixel ~64 per image kept.
     const double voxels = 2.0 * surfaceArea(scene) / (voxelSize * voxelSize);
     const double texels = settings.outputs.lightmaps
-        ? static_cast<double>(settings.lightmap.width) * settings.lightmap.height *
+        ? settings.lightmap.maxTexels() *
               (48.0 * settings.lightmap.subsamplesPerAxis * settings.lightmap.subsamplesPerAxis + 64.0 * 6)
         : 0.0;
     const double pixels = settings.outputs.images
@@ -112,6 +112,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& d
     const double voxelSize = voxelSizeFor(scene, settings.voxel);
     checkMemoryBudget(scene, settings, voxelSize);
     checkLightAttenuationNames(scene, settings.lighting);
+    if (settings.outputs.lightmaps) checkAtlasGroups(scene, settings.lightmap);
     if (scene.lights.empty() && !scene.hasEmitters())
         diagnostics.warn(scene.sourcePath + ": the scene has no lights and no emissive materials: the bake is black");
 

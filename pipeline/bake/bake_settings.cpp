@@ -65,7 +65,9 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.bounces = parseIntSetting("bounces", v, 0, 1024); }},
         // Receivers
         {"lightmap-res", "lightmap atlas width and height in texels (default 256)",
-         [](S& s, const std::string& v) { s.lightmap.width = s.lightmap.height = parseIntSetting("lightmap-res", v, 1, 16384); }},
+         [](S& s, const std::string& v) {
+             s.lightmap.width = s.lightmap.height = parseIntSetting("lightmap-res", v, 1, kMaxLightmapResolution);
+         }},
         {"lightmap-subsamples", "n × n sub-texel probes per texel (default 4)",
          [](S& s, const std::string& v) { s.lightmap.subsamplesPerAxis = parseIntSetting("lightmap-subsamples", v, 1, 8); }},
         {"emitter-strata", "n × n shadow points per emissive triangle for the exact direct term (default 4)",
@@ -114,6 +116,12 @@ std::string describeBakeSettings(const BakeSettings& s) {
         out << ", attenuation=" << s.lighting.attenuation->constant << "," << s.lighting.attenuation->linear << ","
             << s.lighting.attenuation->quadratic;
     if (s.device != cuda::DeviceChoice::Cpu) out << ", device=" << cuda::toString(s.device);
+    for (size_t g = 0; g < s.lightmap.atlases.size(); ++g) {
+        const AtlasGroup& group = s.lightmap.atlases[g];
+        out << (g == 0 ? ", atlases=" : "; ") << group.name << ":";
+        for (size_t m = 0; m < group.meshes.size(); ++m) out << (m == 0 ? "" : "+") << group.meshes[m];
+        if (group.width > 0) out << "@" << group.width << "x" << group.height;
+    }
     return out.str();
 }
 

@@ -1,6 +1,7 @@
 // What the bench's path-tracer points and path-traced reference share: the job's scene
-// (with its added lights) loaded and made traceable, the shared lightmap atlas's receivers
-// and the first camera (or the bake's default view) at the bake's image size.
+// (with its added lights) loaded and made traceable, the first lightmap atlas's receivers
+// (the shared atlas unless atlas groups take every mesh) and the first camera (or the
+// bake's default view) at the bake's image size.
 #pragma once
 
 #include "bake/bake_job.h"

@@ -81,20 +81,65 @@ Light readLight(const json& object, const std::string& where) {
     return light;
 }
 
+// {"name": "walls", "meshes": ["Floor", "BackWall"], "resolution": 512 or [1024, 512]}
+AtlasGroup readAtlasGroup(const json& object, const std::string& where) {
+    if (!object.is_object()) throw InputError(where + " must be an object");
+    for (const auto& entry : object.items())
+        if (entry.key() != "name" && entry.key() != "meshes" && entry.key() != "resolution")
+            throw InputError(where + ": unknown key \"" + entry.key() + "\" (known: name, meshes, resolution)");
+    AtlasGroup group;
+    group.origin = where;
+    if (!object.contains("name") || !object["name"].is_string()) throw InputError(where + " needs a \"name\" string");
+    group.name = object["name"].get<std::string>();
+    if (!object.contains("meshes") || !object["meshes"].is_array())
+        throw InputError(where + " needs a \"meshes\" array of node or mesh names");
+    for (const json& mesh : object["meshes"]) {
+        if (!mesh.is_string()) throw InputError(where + ".meshes: " + mesh.dump() + " is not a name (a string)");
+        group.meshes.push_back(mesh.get<std::string>());
+    }
+    if (object.contains("resolution")) {  // absent: lightmap-res
+        const json& resolution = object["resolution"];
+        const bool pair = resolution.is_array() && resolution.size() == 2;
+        if (!resolution.is_number_integer() &&
+            !(pair && resolution[0].is_number_integer() && resolution[1].is_number_integer()))
+            throw InputError(where + ".resolution must be an integer or [width, height] integers, not " +
+                             resolution.dump());
+        const long long width = (pair ? resolution[0] : resolution).get<long long>();
+        const long long height = (pair ? resolution[1] : resolution).get<long long>();
+        if (width < 1 || height < 1 || width > kMaxLightmapResolution || height > kMaxLightmapResolution)
+            throw SettingsError(where + ".resolution " + resolution.dump() + " is outside 1.." +
+                                std::to_string(kMaxLightmapResolution) + " (the range of lightmap-res)");
+        group.width = static_cast<int>(width);
+        group.height = static_cast<int>(height);
+    }
+    return group;
+}
+
+std::vector<AtlasGroup> readAtlasGroups(const json& array, const std::string& where) {
+    if (!array.is_array()) throw InputError(where + " must be an array of atlas groups");
+    std::vector<AtlasGroup> groups;
+    for (size_t i = 0; i < array.size(); ++i)
+        groups.push_back(readAtlasGroup(array[i], where + "[" + std::to_string(i) + "]"));
+    return groups;
+}
+
+json readJson(const std::string& path, const std::string& what) {
+    std::ifstream in(path);
+    if (!in) throw InputError(path + ": cannot open the " + what);
+    try {
+        return json::parse(in);
+    } catch (const json::exception& e) {
+        throw InputError(path + ": not valid JSON: " + e.what());
+    }
+}
+
 }  // namespace
 
 std::string sceneOutputName(const std::string& scenePath) { return fs::path(scenePath).stem().string(); }
 
 std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& defaults,
                                  const std::string& defaultOutputRoot) {
-    std::ifstream in(path);
-    if (!in) throw InputError(path + ": cannot open the job file");
-    json root;
-    try {
-        root = json::parse(in);
-    } catch (const json::exception& e) {
-        throw InputError(path + ": not valid JSON: " + e.what());
-    }
+    const json root = readJson(path, "job file");
     if (!root.is_object() || !root.contains("scenes") || !root["scenes"].is_array() || root["scenes"].empty())
         throw InputError(path + ": a job file needs a non-empty \"scenes\" array");
     const fs::path base = fs::path(path).parent_path();
@@ -106,6 +151,7 @@ std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& de
     try {
         BakeSettings global = defaults;
         if (root.contains("settings")) applySettings(global, root["settings"], path);
+        if (root.contains("atlases")) global.lightmap.atlases = readAtlasGroups(root["atlases"], path + ": atlases");
         const std::string outputRoot = root.contains("output") ? resolve(root["output"].get<std::string>()) : defaultOutputRoot;
 
         std::vector<BakeJob> jobs;
@@ -118,6 +164,10 @@ std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& de
             job.scenePath = resolve(entry["path"].get<std::string>());
             job.settings = global;
             if (entry.contains("settings")) applySettings(job.settings, entry["settings"], where);
+            // Mesh names belong to one scene: a scene's list replaces the global one ([] for none).
+            if (entry.contains("atlases"))
+                job.settings.lightmap.atlases = readAtlasGroups(entry["atlases"], where + ".atlases");
+            job.settings.lightmap.validate();
             const std::string name = entry.value("name", sceneOutputName(job.scenePath));
             job.outputDir = entry.contains("output") ? resolve(entry["output"].get<std::string>())
                                                      : (fs::path(outputRoot) / name).string();
@@ -131,6 +181,16 @@ std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& de
         return jobs;
     } catch (const json::exception& e) {
         throw InputError(where + ": " + e.what());
+    }
+}
+
+std::vector<AtlasGroup> readAtlasFile(const std::string& path) {
+    const json root = readJson(path, "atlas file");
+    try {
+        if (root.is_object() && root.contains("atlases")) return readAtlasGroups(root["atlases"], path + ": atlases");
+        return readAtlasGroups(root, path);
+    } catch (const json::exception& e) {
+        throw InputError(path + ": " + e.what());
     }
 }
 

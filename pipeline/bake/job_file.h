@@ -4,10 +4,12 @@
 // {
 //   "output": "output",                       // root folder for scenes without "output"
 //   "settings": { "resolution": 128, "lightmap-res": 512 },   // any bake setting, for all
+//   "atlases": [ { "name": "walls", "meshes": ["Floor", "BackWall"], "resolution": 1024 } ],
 //   "scenes": [
 //     { "path": "scenes/cornell_box.gltf" },
 //     { "path": "level.glb", "name": "level", "output": "out/level",
 //       "settings": { "cones": 32, "images": false },
+//       "atlases": [ { "name": "props", "meshes": ["Chair"], "resolution": [512, 256] } ],  // replaces the global list
 //       "lights": [ { "name": "lamp", "type": "point", "position": [1, 2, 3],
 //                     "color": [1, 1, 1], "intensity": 5 } ] }      // W/sr (W/m² directional)
 //   ]
@@ -25,6 +27,10 @@ namespace vl {
 // apply on top, in that order. InputError / SettingsError name the file and the scene.
 std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& defaults,
                                  const std::string& defaultOutputRoot);
+
+// Atlas groups (LightmapSettings::atlases) from a JSON file holding a job file's "atlases"
+// array, or from a job file's top-level "atlases", for commands that take no job file.
+std::vector<AtlasGroup> readAtlasFile(const std::string& path);
 
 // The folder name a scene bakes into: its file stem.
 std::string sceneOutputName(const std::string& scenePath);

@@ -9,18 +9,90 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <map>
 #include <utility>
 
 namespace vl {
 
+namespace {
+
+// "job.json: atlases[0]: atlas 'walls'", to begin a message.
+std::string atlasLabel(const AtlasGroup& group) {
+    return (group.origin.empty() ? "" : group.origin + ": ") + "atlas '" + group.name + "'";
+}
+
+// "atlas 'walls' (job.json: atlases[0])", within a sentence.
+std::string atlasReference(const AtlasGroup& group) {
+    return "atlas '" + group.name + "'" + (group.origin.empty() ? "" : " (" + group.origin + ")");
+}
+
+std::string lowercase(std::string text) {
+    for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return text;
+}
+
+bool endsWith(const std::string& text, const std::string& suffix) {
+    return text.size() >= suffix.size() && text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// The name is the file stem of <name>.exr, <name>_direct.exr, …, beside image.exr: it must
+// be a file name on every system and must not read as another output's file.
+void checkAtlasName(const AtlasGroup& group) {
+    bool safe = !group.name.empty() && group.name.size() <= 64;
+    for (char c : group.name) safe = safe && (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_');
+    if (!safe)
+        throw SettingsError(atlasLabel(group) +
+                            ": an atlas name must be 1 to 64 letters, digits, '-' or '_' (it names the files)");
+    const std::string lower = lowercase(group.name);
+    for (const char* part : {"_direct", "_indirect", "_mask"})
+        if (endsWith(lower, part))
+            throw SettingsError(atlasLabel(group) + ": an atlas name must not end in '" + part +
+                                "', the suffix of an atlas's " + (part + 1) + " file");
+    if (lower == "image" || lower.rfind("image_", 0) == 0)
+        throw SettingsError(atlasLabel(group) + ": atlas names 'image' and 'image_…' are the camera images' files");
+}
+
+}  // namespace
+
 void LightmapSettings::validate() const {
-    if (width < 1 || height < 1 || width > 16384 || height > 16384)
-        throw SettingsError("lightmap-res: " + std::to_string(width) + " x " + std::to_string(height) +
-                            " is outside 1..16384");
+    if (width < 1 || height < 1 || width > kMaxLightmapResolution || height > kMaxLightmapResolution)
+        throw SettingsError("lightmap-res: " + std::to_string(width) + " x " + std::to_string(height) + " is outside 1.." +
+                            std::to_string(kMaxLightmapResolution));
     if (subsamplesPerAxis < 1 || subsamplesPerAxis > 8)
         throw SettingsError("lightmap-subsamples: " + std::to_string(subsamplesPerAxis) + " is outside 1..8");
+    if (!atlases.empty() && atlasPerMesh)
+        throw SettingsError(atlasLabel(atlases.front()) +
+                            ": atlas groups and one atlas per mesh exclude each other; give one or the other");
+    std::map<std::string, const AtlasGroup*> byName;      // lower case: one file system may not tell case
+    std::map<std::string, const AtlasGroup*> groupOfMesh;
+    for (const AtlasGroup& group : atlases) {
+        checkAtlasName(group);
+        const auto [named, fresh] = byName.emplace(lowercase(group.name), &group);
+        if (!fresh) throw SettingsError(atlasLabel(group) + ": the name is taken by " + atlasReference(*named->second));
+        const bool sharedResolution = group.width == 0 && group.height == 0;
+        if (!sharedResolution && (group.width < 1 || group.height < 1 || group.width > kMaxLightmapResolution ||
+                                  group.height > kMaxLightmapResolution))
+            throw SettingsError(atlasLabel(group) + ": resolution " + std::to_string(group.width) + " x " +
+                                std::to_string(group.height) + " is outside 1.." + std::to_string(kMaxLightmapResolution) +
+                                " (the range of lightmap-res)");
+        if (group.meshes.empty()) throw SettingsError(atlasLabel(group) + ": names no meshes");
+        for (const std::string& mesh : group.meshes) {
+            const auto [owner, first] = groupOfMesh.emplace(mesh, &group);
+            if (!first && owner->second != &group)
+                throw SettingsError(atlasLabel(group) + ": mesh '" + mesh + "' is already in " +
+                                    atlasReference(*owner->second) + "; a mesh bakes into one atlas");
+        }
+    }
+}
+
+double LightmapSettings::maxTexels() const {
+    double texels = static_cast<double>(width) * height;
+    for (const AtlasGroup& group : atlases)
+        texels += group.width == 0 ? static_cast<double>(width) * height : static_cast<double>(group.width) * group.height;
+    return texels;
 }
 
 namespace {
@@ -62,8 +134,8 @@ std::string quoted(const Scene& scene, uint32_t mesh) { return "'" + scene.meshe
 
 LightmapAtlas rasterizeAtlas(const Scene& scene, const std::vector<uint32_t>& meshes,
                              const std::vector<uint32_t>& triangleOffsets, const LightmapSettings& settings,
-                             const std::string& name, Diagnostics& diagnostics) {
-    const int W = settings.width, H = settings.height, n = settings.subsamplesPerAxis;
+                             const std::string& name, int W, int H, Diagnostics& diagnostics) {
+    const int n = settings.subsamplesPerAxis;
     const size_t texels = static_cast<size_t>(W) * H;
     std::vector<uint64_t> probeBits(texels, 0);
     std::vector<int32_t> firstMesh(texels, -1);
@@ -140,9 +212,9 @@ LightmapAtlas rasterizeAtlas(const Scene& scene, const std::vector<uint32_t>& me
                              std::to_string(count) + " sub-texel points): those texels average the overlapping triangles");
         else
             diagnostics.warn(scene.sourcePath + ": meshes " + quoted(scene, pair.first) + " and " +
-                             quoted(scene, pair.second) + " overlap in the shared TEXCOORD_1 atlas (" +
+                             quoted(scene, pair.second) + " overlap in the TEXCOORD_1 atlas '" + name + "' (" +
                              std::to_string(count) +
-                             " sub-texel points): those texels average both; bake one image per mesh if they are "
+                             " sub-texel points): those texels average both; give them separate atlases if they are "
                              "separate lightmaps");
     }
 
@@ -184,7 +256,106 @@ LightmapAtlas rasterizeAtlas(const Scene& scene, const std::vector<uint32_t>& me
     return atlas;
 }
 
+// The glTF mesh a loaded mesh comes from: its name without the "/<primitive>" the loader adds.
+std::string gltfMeshName(const std::string& name) {
+    const size_t slash = name.rfind('/');
+    if (slash == std::string::npos || slash + 1 == name.size()) return name;
+    for (size_t i = slash + 1; i < name.size(); ++i)
+        if (!std::isdigit(static_cast<unsigned char>(name[i]))) return name;
+    return name.substr(0, slash);
+}
+
+bool namesMesh(const std::string& entry, const Mesh& mesh) {
+    return entry == mesh.name || (!mesh.node.empty() && entry == mesh.node) || entry == gltfMeshName(mesh.name);
+}
+
+std::string namesInScene(const Scene& scene) {
+    std::vector<std::string> names;
+    for (const Mesh& mesh : scene.meshes)
+        for (const std::string& name : {mesh.node, gltfMeshName(mesh.name)})
+            if (!name.empty() && std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+    constexpr size_t kListed = 16;
+    std::string list;
+    for (size_t i = 0; i < std::min(names.size(), kListed); ++i) list += (i ? ", " : "") + names[i];
+    if (names.size() > kListed) list += ", … (" + std::to_string(names.size()) + " in all)";
+    return list;
+}
+
+// Which group bakes each scene mesh (-1: the shared atlas).
+std::vector<int> assignAtlasGroups(const Scene& scene, const std::vector<AtlasGroup>& groups) {
+    std::vector<int> groupOf(scene.meshes.size(), -1);
+    for (size_t g = 0; g < groups.size(); ++g)
+        for (const std::string& entry : groups[g].meshes) {
+            bool found = false;
+            for (size_t m = 0; m < scene.meshes.size(); ++m) {
+                if (!namesMesh(entry, scene.meshes[m])) continue;
+                found = true;
+                // Two different names (a node and its mesh) can select one mesh.
+                const int owner = groupOf[m];
+                if (owner >= 0 && owner != static_cast<int>(g))
+                    throw SettingsError(atlasLabel(groups[g]) + ": '" + entry + "' selects mesh '" + scene.meshes[m].name +
+                                        "', which " + atlasReference(groups[static_cast<size_t>(owner)]) +
+                                        " already holds; a mesh bakes into one atlas");
+                groupOf[m] = static_cast<int>(g);
+            }
+            if (!found)
+                throw SettingsError(atlasLabel(groups[g]) + ": " + scene.sourcePath + " has no node or mesh named '" +
+                                    entry + "' (it has: " + namesInScene(scene) + ")");
+        }
+    return groupOf;
+}
+
+std::string meshList(const Scene& scene, const std::vector<uint32_t>& meshes) {
+    std::string list;
+    for (uint32_t m : meshes) list += (list.empty() ? "" : ", ") + quoted(scene, m);
+    return list;
+}
+
+struct AtlasMembers {
+    std::vector<uint32_t> shared;                // meshes of the shared atlas (or of one image each)
+    std::vector<std::vector<uint32_t>> grouped;  // per atlas group
+};
+
+// Meshes that are not baked (emitters, meshes without TEXCOORD_1) are left out, with a
+// warning when `diagnostics` is given.
+AtlasMembers assignAtlasMembers(const Scene& scene, const LightmapSettings& settings, Diagnostics* diagnostics) {
+    const std::vector<int> groupOf = assignAtlasGroups(scene, settings.atlases);
+    AtlasMembers members;
+    members.grouped.resize(settings.atlases.size());
+    for (size_t m = 0; m < scene.meshes.size(); ++m) {
+        const Mesh& mesh = scene.meshes[m];
+        const int group = groupOf[m];
+        const auto leftOut = [&](const std::string& why) {
+            if (!diagnostics) return;
+            const std::string atlas =
+                group < 0 ? "the lightmap" : atlasReference(settings.atlases[static_cast<size_t>(group)]);
+            diagnostics->warn(scene.sourcePath + ": mesh '" + mesh.name + "' " + why + ": it is not in " + atlas);
+        };
+        if (mesh.triangleCount() == 0 || scene.materialOf(mesh).emissive()) {
+            if (group >= 0) leftOut("is emissive, and emitters are not baked");  // silent unless asked for by name
+            continue;
+        }
+        if (mesh.uv1.empty()) {
+            leftOut("has no TEXCOORD_1");
+            continue;
+        }
+        (group < 0 ? members.shared : members.grouped[static_cast<size_t>(group)]).push_back(static_cast<uint32_t>(m));
+    }
+    if (!members.shared.empty() && !settings.atlasPerMesh)
+        for (const AtlasGroup& group : settings.atlases)
+            if (group.name == "lightmap")
+                throw SettingsError(atlasLabel(group) + ": 'lightmap' is the shared atlas of the meshes no group names (" +
+                                    meshList(scene, members.shared) +
+                                    "): name the group otherwise or add those meshes to it");
+    return members;
+}
+
 }  // namespace
+
+void checkAtlasGroups(const Scene& scene, const LightmapSettings& settings) {
+    settings.validate();
+    assignAtlasMembers(scene, settings, nullptr);
+}
 
 std::vector<LightmapAtlas> buildLightmapReceivers(const Scene& scene, const LightmapSettings& settings,
                                                   Diagnostics& diagnostics) {
@@ -193,24 +364,27 @@ std::vector<LightmapAtlas> buildLightmapReceivers(const Scene& scene, const Ligh
     for (size_t m = 0; m < scene.meshes.size(); ++m)
         triangleOffsets[m + 1] = triangleOffsets[m] + static_cast<uint32_t>(scene.meshes[m].triangleCount());
 
-    std::vector<uint32_t> baked;
-    for (size_t m = 0; m < scene.meshes.size(); ++m) {
-        const Mesh& mesh = scene.meshes[m];
-        if (mesh.triangleCount() == 0 || scene.materialOf(mesh).emissive()) continue;  // emitters are not baked
-        if (mesh.uv1.empty()) {
-            diagnostics.warn(scene.sourcePath + ": mesh '" + mesh.name +
-                             "' has no TEXCOORD_1: it is not in the lightmap");
+    const AtlasMembers members = assignAtlasMembers(scene, settings, &diagnostics);
+    std::vector<LightmapAtlas> atlases;
+    if (settings.atlasPerMesh) {
+        for (uint32_t m : members.shared)
+            atlases.push_back(rasterizeAtlas(scene, {m}, triangleOffsets, settings, scene.meshes[m].name, settings.width,
+                                             settings.height, diagnostics));
+        return atlases;
+    }
+    if (!members.shared.empty())
+        atlases.push_back(rasterizeAtlas(scene, members.shared, triangleOffsets, settings, "lightmap", settings.width,
+                                         settings.height, diagnostics));
+    for (size_t g = 0; g < settings.atlases.size(); ++g) {
+        const AtlasGroup& group = settings.atlases[g];
+        if (members.grouped[g].empty()) {
+            diagnostics.warn(scene.sourcePath + ": " + atlasReference(group) + " has no mesh to bake: no image for it");
             continue;
         }
-        baked.push_back(static_cast<uint32_t>(m));
-    }
-    std::vector<LightmapAtlas> atlases;
-    if (baked.empty()) return atlases;
-    if (settings.atlasPerMesh) {
-        for (uint32_t m : baked)
-            atlases.push_back(rasterizeAtlas(scene, {m}, triangleOffsets, settings, scene.meshes[m].name, diagnostics));
-    } else {
-        atlases.push_back(rasterizeAtlas(scene, baked, triangleOffsets, settings, "lightmap", diagnostics));
+        const bool sharedResolution = group.width == 0 && group.height == 0;
+        atlases.push_back(rasterizeAtlas(scene, members.grouped[g], triangleOffsets, settings, group.name,
+                                         sharedResolution ? settings.width : group.width,
+                                         sharedResolution ? settings.height : group.height, diagnostics));
     }
     return atlases;
 }

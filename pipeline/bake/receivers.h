@@ -11,6 +11,13 @@
 // Blender export does; emitter meshes are not baked, and a mesh without TEXCOORD_1 is
 // skipped with a warning naming it.
 //
+// Atlas groups: meshes that share one TEXCOORD_1 layout (Blender's lightmap pack over a set
+// of objects) bake into their own image at their own resolution; the meshes no group names
+// stay in the shared atlas "lightmap". A group names meshes as a user sees them: a name
+// selects every scene mesh whose glTF node name, glTF mesh name (all its primitives and
+// instances) or full "<mesh>/<primitive>" name it equals; Blender writes object names as
+// node names and mesh data names as mesh names, and the two often differ.
+//
 // Camera: per pixel, an n × n grid of pinhole primary rays (a G-buffer): the surface each
 // ray hits, its normal turned toward the camera, weighted 1/n² (a pixel that partly sees
 // the background sums to less than 1), and the emission seen directly.
@@ -31,18 +38,33 @@ namespace vl {
 class Bvh;
 class TraceScene;
 
+constexpr int kMaxLightmapResolution = 16384;
+
+struct AtlasGroup {
+    std::string name;                 // the image's name and file stem: letters, digits, '-', '_'
+    std::vector<std::string> meshes;  // node, mesh or "<mesh>/<primitive>" names (see above)
+    int width = 0;                    // texels; 0 × 0: the shared atlas's resolution (lightmap-res)
+    int height = 0;
+    std::string origin;               // where it was declared ("job.json: atlases[0]"), for messages
+};
+
 struct LightmapSettings {
     int width = 256;
     int height = 256;
     int subsamplesPerAxis = 4;     // n: sub-texel probe grid n × n (1 = texel centres only), 1..8
     bool samplePerTriangle = true; // one sample per (texel, triangle) at its covered points' centroid
     bool atlasPerMesh = false;     // each mesh its own image instead of one shared atlas
+    std::vector<AtlasGroup> atlases;  // groups baked into their own images; excludes atlasPerMesh
 
-    void validate() const;  // SettingsError naming the setting
+    // SettingsError naming the setting, or the atlas group and where it was declared. Checks
+    // what needs no scene; buildLightmapReceivers checks the mesh names against the scene.
+    void validate() const;
+    // Texels of the shared atlas and every group's image, for the memory budget.
+    double maxTexels() const;
 };
 
 struct LightmapAtlas {
-    std::string name;              // "lightmap" for the shared atlas; the mesh name per mesh
+    std::string name;              // "lightmap" for the shared atlas; the group's name; the mesh name per mesh
     std::vector<uint32_t> meshes;  // indices into Scene::meshes baked into this image
     SurfaceSampleSet receivers;    // per texel; weights sum to 1 on covered texels
     Image mask;                    // 1 channel: 1 covered, 0 padding
@@ -50,7 +72,15 @@ struct LightmapAtlas {
     size_t overlappingProbes = 0;  // sub-texel points covered by more than one triangle
 };
 
-// Global triangle ids follow gatherTriangles (mesh-major, every triangle).
+// What a lightmap bake checks of its atlas groups against the scene, cheaply, so a bake can
+// refuse them before any work: every name selects a mesh, no mesh is in two groups, and
+// "lightmap" names a group only when no mesh is left for the shared atlas (SettingsError
+// naming the group and where it was declared).
+void checkAtlasGroups(const Scene& scene, const LightmapSettings& settings);
+
+// Global triangle ids follow gatherTriangles (mesh-major, every triangle). The shared atlas
+// comes first when it has meshes, then the groups in the order given; a group left with no
+// mesh to bake (none has TEXCOORD_1, or all emit) is reported and makes no image.
 std::vector<LightmapAtlas> buildLightmapReceivers(const Scene& scene, const LightmapSettings& settings,
                                                   Diagnostics& diagnostics);
 

@@ -550,6 +550,7 @@ private:
             Mesh out = primitive(mesh.primitives[p], where, world, det < 0.0);
             if (out.indices.empty()) continue;
             out.name = baseName + "/" + std::to_string(p);
+            out.node = model_.nodes[static_cast<size_t>(nodeIndex)].name;
             scene_.meshes.push_back(std::move(out));
         }
     }

@@ -63,6 +63,7 @@ struct Material {
 // the front (winding already flipped for transforms with a negative determinant).
 struct Mesh {
     std::string name;          // "<mesh name>/<primitive index>" (node name when the mesh has none)
+    std::string node;          // name of the glTF node that places it (what Blender calls the object)
     int material = -1;         // index into Scene::materials; -1 = the glTF default material
     std::vector<vec3> positions;
     std::vector<vec3> normals;   // unit length, one per position (area-weighted when the file has none)

@@ -13,8 +13,11 @@
 #include <catch2/catch.hpp>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <tuple>
 
 using namespace vl;
 using namespace vl::test;
@@ -286,4 +289,137 @@ TEST_CASE("Job files set settings globally and per scene and add lights", "[bake
     std::ofstream(dir / "broken.json") << "{ not json";
     CHECK_THROWS_WITH(readJobFile((dir / "broken.json").string(), BakeSettings{}, "output"),
                       Catch::Contains("broken.json") && Catch::Contains("not valid JSON"));
+}
+
+namespace {
+
+// What readJobFile throws (as E) for a job file with this text.
+template <typename E>
+std::string jobFileError(const fs::path& path, const std::string& text) {
+    std::ofstream(path) << text;
+    try {
+        readJobFile(path.string(), BakeSettings{}, "output");
+    } catch (const E& e) {
+        return e.what();
+    }
+    FAIL(path.filename().string() << " was accepted");
+    return "";
+}
+
+std::string sceneWithAtlases(const std::string& atlases) {
+    return R"({"scenes": [{"path": "a.gltf"}, {"path": "b.gltf", "atlases": )" + atlases + "}]}";
+}
+
+}  // namespace
+
+TEST_CASE("Job files group meshes into atlases globally and per scene", "[bake]") {
+    const fs::path dir = tempDir("job-atlases");
+    const fs::path path = dir / "job.json";
+    std::ofstream(path) << R"({"settings": {"lightmap-res": 128},
+        "atlases": [{"name": "walls", "meshes": ["Floor", "BackWall"], "resolution": 512},
+                    {"name": "blocks", "meshes": ["ShortBlock"]}],
+        "scenes": [{"path": "a.gltf"},
+                   {"path": "b.gltf", "atlases": [{"name": "props", "meshes": ["Chair", "Table/0"], "resolution": [1024, 256]}]},
+                   {"path": "c.gltf", "atlases": []}]})";
+    const std::vector<BakeJob> jobs = readJobFile(path.string(), BakeSettings{}, "output");
+    REQUIRE(jobs.size() == 3);
+    const std::vector<AtlasGroup>& global = jobs[0].settings.lightmap.atlases;
+    REQUIRE(global.size() == 2);
+    CHECK(global[0].name == "walls");
+    CHECK(global[0].meshes == std::vector<std::string>{"Floor", "BackWall"});
+    CHECK(global[0].width == 512);
+    CHECK(global[0].height == 512);
+    CHECK(global[0].origin == path.string() + ": atlases[0]");
+    CHECK(global[1].name == "blocks");
+    CHECK(global[1].width == 0);  // lightmap-res, 128 here
+    CHECK(jobs[0].settings.lightmap.width == 128);
+    const std::vector<AtlasGroup>& own = jobs[1].settings.lightmap.atlases;
+    REQUIRE(own.size() == 1);  // replaces the global list
+    CHECK(own[0].name == "props");
+    CHECK(own[0].meshes == std::vector<std::string>{"Chair", "Table/0"});
+    CHECK(own[0].width == 1024);
+    CHECK(own[0].height == 256);
+    CHECK(own[0].origin == path.string() + ": scenes[1].atlases[0]");
+    CHECK(jobs[2].settings.lightmap.atlases.empty());
+
+    // Each mistake names the file and the element: "<file>: <element>…".
+    const auto at = [&](const std::string& file, const std::string& element) {
+        return Catch::Contains((dir / file).string() + ": " + element);
+    };
+    const std::vector<std::pair<std::string, std::string>> wrongTypes = {
+        {R"({"name": "walls"})", "scenes[1].atlases must be an array"},
+        {R"(["walls"])", "scenes[1].atlases[0] must be an object"},
+        {R"([{"meshes": ["Floor"]}])", "scenes[1].atlases[0] needs a \"name\" string"},
+        {R"([{"name": 7, "meshes": ["Floor"]}])", "scenes[1].atlases[0] needs a \"name\" string"},
+        {R"([{"name": "walls", "meshes": "Floor"}])", "scenes[1].atlases[0] needs a \"meshes\" array"},
+        {R"([{"name": "walls", "meshes": ["Floor", 3]}])", "scenes[1].atlases[0].meshes: 3"},
+        {R"([{"name": "walls", "meshes": ["Floor"], "resolution": "512"}])", "scenes[1].atlases[0].resolution"},
+        {R"([{"name": "walls", "meshes": ["Floor"], "resolution": 512.5}])", "scenes[1].atlases[0].resolution"},
+        {R"([{"name": "walls", "meshes": ["Floor"], "resolution": [512]}])", "scenes[1].atlases[0].resolution"},
+        {R"([{"name": "walls", "meshes": ["Floor"], "resolution": [512, "x"]}])", "scenes[1].atlases[0].resolution"},
+        {R"([{"name": "walls", "meshes": ["Floor"], "resolutoin": 512}])", "scenes[1].atlases[0]: unknown key \"resolutoin\""},
+    };
+    for (size_t i = 0; i < wrongTypes.size(); ++i) {
+        const std::string file = "mistyped" + std::to_string(i) + ".json";
+        CHECK_THAT(jobFileError<InputError>(dir / file, sceneWithAtlases(wrongTypes[i].first)), at(file, wrongTypes[i].second));
+    }
+    CHECK_THAT(jobFileError<InputError>(dir / "global.json", R"({"atlases": [1], "scenes": [{"path": "a.gltf"}]})"),
+               at("global.json", "atlases[0] must be an object"));
+
+    const std::vector<std::pair<std::string, std::string>> badValues = {
+        {R"([{"name": "walls", "meshes": ["Floor"], "resolution": 0}])", "scenes[1].atlases[0].resolution 0 is outside 1..16384"},
+        {R"([{"name": "walls", "meshes": ["Floor"], "resolution": 16385}])", "scenes[1].atlases[0].resolution 16385 is outside"},
+        {R"([{"name": "walls", "meshes": ["Floor"], "resolution": [512, -2]}])",
+         "scenes[1].atlases[0].resolution [512,-2] is outside"},
+        {R"([{"name": "walls", "meshes": []}])", "scenes[1].atlases[0]: atlas 'walls': names no meshes"},
+        {R"([{"name": "my walls", "meshes": ["Floor"]}])", "scenes[1].atlases[0]: atlas 'my walls': an atlas name must"},
+        {R"([{"name": "walls", "meshes": ["Floor"]}, {"name": "walls", "meshes": ["Back"]}])",
+         "scenes[1].atlases[1]: atlas 'walls': the name is taken"},
+        {R"([{"name": "walls", "meshes": ["Floor"]}, {"name": "floor", "meshes": ["Floor"]}])",
+         "scenes[1].atlases[1]: atlas 'floor': mesh 'Floor' is already in atlas 'walls'"},
+    };
+    for (size_t i = 0; i < badValues.size(); ++i) {
+        const std::string file = "refused" + std::to_string(i) + ".json";
+        CHECK_THAT(jobFileError<SettingsError>(dir / file, sceneWithAtlases(badValues[i].first)), at(file, badValues[i].second));
+    }
+}
+
+TEST_CASE("A bake job writes each atlas group into its own lightmap at its resolution", "[bake]") {
+    const fs::path dir = tempDir("bake-atlases");
+    const fs::path out = dir / "out";
+    fs::remove_all(out);
+    const std::string scene = sourceDir() + "/scenes/cornell_box.gltf";
+    std::ofstream(dir / "job.json") << R"({"output": "out",
+        "settings": {"resolution": 16, "cones": 6, "bounces": 1, "lightmap-res": 32, "images": false, "grids": false},
+        "atlases": [{"name": "walls", "meshes": ["Floor", "BackWall", "RedWall", "GreenWall"], "resolution": [64, 32]},
+                    {"name": "blocks", "meshes": ["ShortBlock", "TallBlock"], "resolution": 16}],
+        "scenes": [{"path": ")" + scene + R"(", "name": "grouped"},
+                   {"path": ")" + scene + R"(", "name": "misnamed", "atlases": [{"name": "walls", "meshes": ["Flor"]}]}]})";
+    std::vector<BakeJob> jobs = readJobFile((dir / "job.json").string(), BakeSettings{}, "output");
+    REQUIRE(jobs.size() == 2);
+    for (BakeJob& job : jobs) job.settings.quiet = true;
+
+    const BakeReport report = runBake(jobs[0]);
+    INFO(report.error);
+    REQUIRE(report.ok);
+    const fs::path grouped = out / "grouped";
+    for (const auto& [stem, width, height] : std::vector<std::tuple<std::string, int, int>>{
+             {"lightmap", 32, 32}, {"walls", 64, 32}, {"blocks", 16, 16}}) {  // the ceiling stays in "lightmap"
+        for (const char* suffix : {".exr", "_direct.exr", "_indirect.exr", "_mask.exr", ".png"})
+            CHECK(fs::exists(grouped / (stem + suffix)));
+        const Image total = readImage((grouped / (stem + ".exr")).string());
+        const Image mask = readImage((grouped / (stem + "_mask.exr")).string());
+        CHECK(total.width == width);
+        CHECK(total.height == height);
+        CHECK(std::count(mask.pixels.begin(), mask.pixels.end(), 1.0f) > 0);
+    }
+    std::ifstream json(grouped / "bake.json");
+    const std::string text((std::istreambuf_iterator<char>(json)), std::istreambuf_iterator<char>());
+    CHECK_THAT(text, Catch::Contains("atlases=walls:Floor+BackWall+RedWall+GreenWall@64x32; blocks:ShortBlock+TallBlock@16x16"));
+
+    const BakeReport misnamed = runBake(jobs[1]);
+    CHECK_FALSE(misnamed.ok);
+    CHECK_THAT(misnamed.error, Catch::Contains((dir / "job.json").string() + ": scenes[1].atlases[0]: atlas 'walls'") &&
+                                   Catch::Contains("cornell_box.gltf") && Catch::Contains("'Flor'"));
+    CHECK_FALSE(fs::exists(out / "misnamed"));
 }

@@ -13,7 +13,9 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <set>
 
 using namespace vl;
 
@@ -259,4 +261,230 @@ TEST_CASE("Camera receivers: each probe lies on its pinhole ray with the normal 
             }
         REQUIRE(partial > 0);  // the plane's edges cross some pixels
     }
+}
+
+namespace {
+
+// The meshes (indices into Scene::meshes) whose triangles the atlas's texel samples lie on.
+std::set<uint32_t> meshesSampled(const Scene& scene, const LightmapAtlas& atlas) {
+    std::vector<uint32_t> firstTriangle{0};
+    for (const Mesh& mesh : scene.meshes)
+        firstTriangle.push_back(firstTriangle.back() + static_cast<uint32_t>(mesh.triangleCount()));
+    std::set<uint32_t> meshes;
+    for (const SurfaceSample& s : atlas.receivers.samples)
+        meshes.insert(static_cast<uint32_t>(std::upper_bound(firstTriangle.begin(), firstTriangle.end(), s.triangle) -
+                                            firstTriangle.begin() - 1));
+    return meshes;
+}
+
+// The texels of `atlas` with a sample on one of `meshes`: what those meshes cover in it.
+std::vector<bool> texelsOf(const Scene& scene, const LightmapAtlas& atlas, const std::set<std::string>& meshes) {
+    std::vector<uint32_t> meshOfTriangle;
+    for (uint32_t m = 0; m < scene.meshes.size(); ++m)
+        meshOfTriangle.insert(meshOfTriangle.end(), scene.meshes[m].triangleCount(), m);
+    std::vector<bool> texels(atlas.receivers.elementCount(), false);
+    for (size_t i = 0; i < texels.size(); ++i)
+        for (uint32_t k = atlas.receivers.begin[i]; k < atlas.receivers.begin[i + 1]; ++k)
+            texels[i] = texels[i] || meshes.count(scene.meshes[meshOfTriangle[atlas.receivers.samples[k].triangle]].node) > 0;
+    return texels;
+}
+
+std::vector<bool> maskTexels(const LightmapAtlas& atlas) {
+    std::vector<bool> covered;
+    for (float v : atlas.mask.pixels) covered.push_back(v > 0.5f);
+    return covered;
+}
+
+AtlasGroup group(const std::string& name, std::vector<std::string> meshes, int width = 0, int height = 0) {
+    AtlasGroup g;
+    g.name = name;
+    g.meshes = std::move(meshes);
+    g.width = width;
+    g.height = height;
+    g.origin = "job.json: atlases";
+    return g;
+}
+
+const std::set<std::string> kCornellWalls{"Floor", "BackWall", "RedWall", "GreenWall", "Ceiling"};
+const std::set<std::string> kCornellBlocks{"ShortBlock", "TallBlock"};
+
+}  // namespace
+
+TEST_CASE("Atlas groups of the Cornell box cover exactly their meshes' texels of the shared atlas", "[bake]") {
+    VL_SKIP_WITHOUT_SHARED();
+    LoadOptions load;
+    load.echoWarnings = false;
+    const Scene scene = loadGltf(vl::test::sharedDir() + "/reference/cornell_quad.gltf", load);
+    Diagnostics diagnostics(false, false);
+    LightmapSettings settings;  // 256²
+    const LightmapAtlas shared = buildLightmapReceivers(scene, settings, diagnostics).at(0);
+
+    // Every mesh in a group at the shared resolution: the union is the shared atlas, texel
+    // for texel, and each group holds its meshes' texels and no other mesh's samples.
+    settings.atlases = {group("walls", {"Floor", "BackWall", "RedWall", "GreenWall", "Ceiling"}),
+                        group("blocks", {"ShortBlock", "TallBlock/0"})};  // a node name and a full name
+    const auto split = buildLightmapReceivers(scene, settings, diagnostics);
+    REQUIRE(diagnostics.warnings().empty());
+    REQUIRE(split.size() == 2);  // every baked mesh is grouped: no shared atlas
+    CHECK(split[0].name == "walls");
+    CHECK(split[1].name == "blocks");
+    CHECK(split[0].meshes.size() == 5);
+    CHECK(split[1].meshes.size() == 2);
+    for (size_t g = 0; g < 2; ++g) {
+        const std::set<std::string>& names = g == 0 ? kCornellWalls : kCornellBlocks;
+        for (uint32_t m : meshesSampled(scene, split[g])) CHECK(names.count(scene.meshes[m].node) == 1);
+        CHECK(maskTexels(split[g]) == texelsOf(scene, shared, names));
+    }
+    size_t unionCovered = 0, unionDiffers = 0, walls = 0, blocks = 0;
+    for (int y = 0; y < 256; ++y)
+        for (int x = 0; x < 256; ++x) {
+            const bool inWalls = split[0].mask.at(x, y) > 0.5f, inBlocks = split[1].mask.at(x, y) > 0.5f;
+            unionDiffers += (inWalls || inBlocks) != (shared.mask.at(x, y) > 0.5f);
+            unionCovered += inWalls || inBlocks;
+            walls += inWalls;
+            blocks += inBlocks;
+        }
+    CHECK(unionDiffers == 0);
+    CHECK(unionCovered == shared.coveredTexels);
+    CHECK(walls > 0);
+    CHECK(blocks > 0);
+
+    // Groups at their own resolutions: each image has its size and covers what its meshes
+    // cover in a shared atlas of that size.
+    settings.atlases = {group("walls", {"Floor", "BackWall", "RedWall", "GreenWall", "Ceiling"}, 512, 128),
+                        group("blocks", {"ShortBlock", "TallBlock"}, 64, 64)};
+    const auto sized = buildLightmapReceivers(scene, settings, diagnostics);
+    REQUIRE(sized.size() == 2);
+    for (size_t g = 0; g < 2; ++g) {
+        const int width = g == 0 ? 512 : 64, height = g == 0 ? 128 : 64;
+        CHECK(sized[g].mask.width == width);
+        CHECK(sized[g].mask.height == height);
+        CHECK(sized[g].receivers.width == width);
+        CHECK(sized[g].receivers.height == height);
+        LightmapSettings same;
+        same.width = width;
+        same.height = height;
+        const LightmapAtlas sharedAtThatSize = buildLightmapReceivers(scene, same, diagnostics).at(0);
+        const std::vector<bool> expected = texelsOf(scene, sharedAtThatSize, g == 0 ? kCornellWalls : kCornellBlocks);
+        CHECK(maskTexels(sized[g]) == expected);
+        CHECK(sized[g].coveredTexels == static_cast<size_t>(std::count(expected.begin(), expected.end(), true)));
+    }
+
+    // Pulling out one mesh: the rest stay in the shared "lightmap", which comes first.
+    settings.atlases = {group("tall", {"TallBlock"}, 128, 128)};
+    const auto pulled = buildLightmapReceivers(scene, settings, diagnostics);
+    REQUIRE(pulled.size() == 2);
+    CHECK(pulled[0].name == "lightmap");
+    CHECK(pulled[0].mask.width == 256);
+    CHECK(pulled[0].meshes.size() == 6);
+    CHECK(pulled[1].name == "tall");
+    REQUIRE(pulled[1].meshes.size() == 1);
+    CHECK(scene.meshes[pulled[1].meshes[0]].node == "TallBlock");
+    std::set<std::string> rest = kCornellWalls;
+    rest.insert("ShortBlock");
+    CHECK(maskTexels(pulled[0]) == texelsOf(scene, shared, rest));
+    CHECK(diagnostics.warnings().empty());
+
+    // The emitter is left out of the shared atlas silently, but named when a group asks for it.
+    settings.atlases = {group("tall", {"TallBlock", "Light"})};
+    Diagnostics warned(false, false);
+    CHECK(buildLightmapReceivers(scene, settings, warned).at(1).meshes.size() == 1);
+    REQUIRE(warned.warnings().size() == 1);
+    CHECK_THAT(warned.warnings()[0], Catch::Contains("'Light/0'") && Catch::Contains("emissive") && Catch::Contains("'tall'"));
+}
+
+TEST_CASE("An atlas group names meshes by node name or glTF mesh name or full name", "[bake]") {
+    // One glTF mesh "Plane" of two primitives placed by node "Floor", and "Plane.001" by node "Wall".
+    Scene scene = floorScene();
+    scene.meshes.clear();
+    for (const char* name : {"Plane/0", "Plane/1"}) {
+        scene.meshes.push_back(floorMesh(name, -1.0f, 1.0f, -2.0f, 2.0f, 0.0f, 0));
+        scene.meshes.back().node = "Floor";
+    }
+    scene.meshes.push_back(floorMesh("Plane.001/0", -1.0f, 1.0f, -2.0f, 2.0f, 1.0f, 0));
+    scene.meshes.back().node = "Wall";
+    LightmapSettings settings;
+    settings.width = settings.height = 8;
+    Diagnostics quiet(false, false);
+    for (const std::string name : {"Floor", "Plane"}) {
+        settings.atlases = {group("floor", {name})};
+        const auto atlases = buildLightmapReceivers(scene, settings, quiet);
+        REQUIRE(atlases.size() == 2);
+        CHECK(atlases[0].meshes == std::vector<uint32_t>{2});
+        CHECK(atlases[1].meshes == std::vector<uint32_t>{0, 1});
+    }
+    settings.atlases = {group("first", {"Plane/0"}), group("second", {"Plane/1", "Wall"})};
+    const auto byPrimitive = buildLightmapReceivers(scene, settings, quiet);
+    REQUIRE(byPrimitive.size() == 2);
+    CHECK(byPrimitive[0].meshes == std::vector<uint32_t>{0});
+    CHECK(byPrimitive[1].meshes == std::vector<uint32_t>{1, 2});
+    // The node and the mesh name of one primitive in two groups.
+    settings.atlases = {group("first", {"Floor"}), group("second", {"Plane/1"})};
+    CHECK_THROWS_WITH(buildLightmapReceivers(scene, settings, quiet),
+                      Catch::Contains("job.json: atlases") && Catch::Contains("'second'") &&
+                          Catch::Contains("'Plane/1'") && Catch::Contains("'first'") && Catch::Contains("one atlas"));
+}
+
+TEST_CASE("Atlas groups that cannot be baked are refused naming the group and where it was declared", "[bake]") {
+    Scene scene = floorScene();  // "floor", floor.gltf
+    scene.meshes.push_back(floorMesh("wall", -1.0f, 1.0f, -2.0f, 2.0f, 1.0f, 0));
+    LightmapSettings settings;
+    settings.width = settings.height = 8;
+    Diagnostics quiet(false, false);
+    const auto refused = [&](std::vector<AtlasGroup> groups) {
+        settings.atlases = std::move(groups);
+        try {
+            buildLightmapReceivers(scene, settings, quiet);
+        } catch (const SettingsError& e) {
+            return std::string(e.what());
+        }
+        FAIL("accepted");
+        return std::string();
+    };
+    const auto place = Catch::Contains("job.json: atlases");
+    CHECK_THAT(refused({group("walls", {"flor"})}),
+               place && Catch::Contains("'walls'") && Catch::Contains("floor.gltf") && Catch::Contains("'flor'") &&
+                   Catch::Contains("floor, wall"));
+    // The same checks a bake runs before any work, without the receivers.
+    CHECK_THROWS_AS(checkAtlasGroups(scene, settings), SettingsError);
+    settings.atlases = {group("walls", {"wall"})};
+    CHECK_NOTHROW(checkAtlasGroups(scene, settings));
+    CHECK_THAT(refused({group("a", {"floor"}), group("b", {"wall", "floor"})}),
+               place && Catch::Contains("'b'") && Catch::Contains("'floor'") && Catch::Contains("'a'"));
+    CHECK_THAT(refused({group("empty", {})}), place && Catch::Contains("'empty'") && Catch::Contains("no meshes"));
+    CHECK_THAT(refused({group("walls", {"floor"}), group("Walls", {"wall"})}),
+               place && Catch::Contains("'Walls'") && Catch::Contains("taken"));
+    for (const std::string& name : std::vector<std::string>{"", "my walls", "../walls", "walls.exr", "walls_direct",
+                                                           "walls_Mask", "image", "image_2", std::string(65, 'w')})
+        CHECK_THAT(refused({group(name, {"floor"})}), place && Catch::Contains("'" + name + "'"));
+    CHECK_THAT(refused({group("lightmap", {"floor"})}),  // "wall" is left over for the shared atlas
+               place && Catch::Contains("'lightmap'") && Catch::Contains("shared atlas") && Catch::Contains("'wall'"));
+    for (const auto& [w, h] : std::vector<std::pair<int, int>>{{0, 8}, {8, -1}, {16385, 8}})
+        CHECK_THAT(refused({group("walls", {"floor"}, w, h)}),
+                   place && Catch::Contains("'walls'") && Catch::Contains("resolution") && Catch::Contains("1..16384"));
+    settings.atlasPerMesh = true;
+    CHECK_THAT(refused({group("walls", {"floor"})}), place && Catch::Contains("one atlas per mesh"));
+    settings.atlasPerMesh = false;
+
+    // Named "lightmap" when it takes every mesh: it is the shared atlas, at its own size.
+    settings.atlases = {group("lightmap", {"floor", "wall"}, 16, 16)};
+    const auto whole = buildLightmapReceivers(scene, settings, quiet);
+    REQUIRE(whole.size() == 1);
+    CHECK(whole[0].name == "lightmap");
+    CHECK(whole[0].meshes == std::vector<uint32_t>{0, 1});
+    CHECK(whole[0].mask.width == 16);
+
+    // A grouped mesh without TEXCOORD_1 is left out with a warning naming it and its group
+    // (an error under --strict); a group left empty makes no image.
+    scene.meshes[1].uv1.clear();
+    settings.atlases = {group("walls", {"wall"}), group("floors", {"floor"})};
+    Diagnostics warned(false, false);
+    const auto atlases = buildLightmapReceivers(scene, settings, warned);
+    REQUIRE(atlases.size() == 1);
+    CHECK(atlases[0].name == "floors");
+    REQUIRE(warned.warnings().size() == 2);
+    CHECK_THAT(warned.warnings()[0], Catch::Contains("'wall'") && Catch::Contains("TEXCOORD_1") && Catch::Contains("'walls'"));
+    CHECK_THAT(warned.warnings()[1], Catch::Contains("'walls'") && Catch::Contains("no mesh to bake"));
+    Diagnostics strict(true, false);
+    CHECK_THROWS_AS(buildLightmapReceivers(scene, settings, strict), InputError);
 }

@@ -1,10 +1,12 @@
 // `voxlight reference scene.gltf --spp N`: the path-traced ground truth. Writes a camera
 // render (linear EXR beauty/direct/indirect/albedo + sRGB PNG previews), the lightmap atlas
 // (E/π per texel: total/direct/indirect EXRs, padding dilated, plus its coverage mask) and
-// summary.json with the settings, counts and wall times.
+// summary.json with the settings, counts and wall times. --atlases bakes the same atlas
+// groups as a job file's "atlases", each into lightmap_<name>.exr.
 #include "tools/voxlight/commands.h"
 
 #include "bake/dilate.h"
+#include "bake/job_file.h"
 #include "bake/receivers.h"
 #include "core/atomic_file.h"
 #include "core/diagnostics.h"
@@ -43,6 +45,7 @@ struct ReferenceOptions {
     int lightmapRes = 256;
     int lightmapSubsamples = LightmapSettings{}.subsamplesPerAxis;
     bool lightmapPerMesh = false;
+    std::string atlasFile;
     int maxBounces = PathSettings{}.maxBounces;
     int rouletteStart = PathSettings{}.rouletteStart;
     std::string filter = "tent";
@@ -108,6 +111,7 @@ void runReference(const ReferenceOptions& o) {
     lightmap.width = lightmap.height = o.lightmapRes;
     lightmap.subsamplesPerAxis = o.lightmapSubsamples;
     lightmap.atlasPerMesh = o.lightmapPerMesh;
+    if (!o.atlasFile.empty()) lightmap.atlases = readAtlasFile(o.atlasFile);
     if (!o.noLightmap) lightmap.validate();
     if (o.width < 0 || o.height < 0 || o.width > 16384 || o.height > 16384)
         throw SettingsError("width/height: " + std::to_string(o.width) + " x " + std::to_string(o.height) +
@@ -120,6 +124,7 @@ void runReference(const ReferenceOptions& o) {
     load.strict = o.strict;
     const Scene scene = loadGltf(o.scene, load);
     timings["load"] = secondsSince(t);
+    if (!o.noLightmap) checkAtlasGroups(scene, lightmap);  // before a render that may take minutes
     Diagnostics diagnostics(o.strict);
 
     t = Clock::now();
@@ -201,7 +206,7 @@ void runReference(const ReferenceOptions& o) {
             const TraceResult r = onGpu ? cuda::traceIrradianceCuda(traceScene, bvh, atlas.receivers, lightmapSettings)
                                         : traceIrradiance(traceScene, bvh, atlas.receivers, lightmapSettings);
             lightmapSeconds += r.seconds;
-            const std::string stem = o.lightmapPerMesh ? "lightmap_" + fileSafe(atlas.name) : "lightmap";
+            const std::string stem = atlas.name == "lightmap" ? "lightmap" : "lightmap_" + fileSafe(atlas.name);
             const nlohmann::json mean = meanRgb(r.beauty, &atlas.mask);
             const nlohmann::json meanDirect = meanRgb(r.direct, &atlas.mask);
             Image total = r.beauty, direct = r.direct, indirect = r.indirect;
@@ -215,8 +220,9 @@ void runReference(const ReferenceOptions& o) {
             maps.push_back({{"name", atlas.name},
                             {"files", {stem + ".exr", stem + "_direct.exr", stem + "_indirect.exr", stem + "_mask.exr"}},
                             {"meshes", meshes},
+                            {"resolution", {atlas.mask.width, atlas.mask.height}},
                             {"covered_texels", atlas.coveredTexels},
-                            {"coverage", double(atlas.coveredTexels) / (double(lightmap.width) * lightmap.height)},
+                            {"coverage", double(atlas.coveredTexels) / (double(atlas.mask.width) * atlas.mask.height)},
                             {"receiver_samples", atlas.receivers.samples.size()},
                             {"overlapping_probes", atlas.overlappingProbes},
                             {"paths", r.paths},
@@ -260,6 +266,9 @@ void addReferenceCommand(CLI::App& app) {
     cmd->add_option("--lightmap-subsamples", o->lightmapSubsamples,
                     "sub-texel probe grid n x n for coverage (1 = texel centres; default 4)");
     cmd->add_flag("--lightmap-per-mesh", o->lightmapPerMesh, "one lightmap image per mesh instead of one shared atlas");
+    cmd->add_option("--atlases", o->atlasFile,
+                    "JSON file with atlas groups as a job file's \"atlases\" (or a job file): each group its own "
+                    "lightmap_<name>.exr, other meshes in lightmap.exr");
     cmd->add_option("--max-bounces", o->maxBounces, "maximum bounces (default 64, as the Cycles references)");
     cmd->add_option("--roulette-start", o->rouletteStart, "bounce where Russian roulette starts (default 5)");
     cmd->add_option("--filter", o->filter, "pixel filter: tent (ERRATA eq. 11, default) or box (Cycles' 1-pixel box)");
