@@ -4,13 +4,14 @@
 // stages (renderCamera, traceIrradiance, shadeReceivers), so the GPU path cannot drift from
 // the CPU one unnoticed on machines without a GPU.
 //
-// The per-element loops of trace/path_tracer.cpp and bake/shade_receivers.cpp are private
-// to those files; they are mirrored here (same seeds, same order, same double sums). The
-// kernels they call (traceCameraPath, traceReceiverPath, directIrradiance,
-// coneTraceIrradiance) are the stages' own.
+// The per-element loops of trace/path_tracer.cpp are private to that file; they are
+// mirrored here (same seeds, same order, same double sums). The kernels they call
+// (traceCameraPath, traceReceiverPath) are the stage's own; receiver shading is
+// bake/shade_element.h's, shared with the CPU stage.
 #pragma once
 
 #include "bake/direct_light.h"
+#include "bake/shade_element.h"
 #include "cone/cone_set.h"
 #include "cone/cone_trace.h"
 #include "trace/camera.h"
@@ -125,32 +126,8 @@ VL_HOSTDEV inline PathEstimate receiverElementPaths(const TraceSceneView& scene,
     return acc.finish(spp);
 }
 
-// One bake receiver element: the exact direct term and the cone-traced indirect term as
-// E/π, plain and times the samples' albedo (bake/shade_receivers.cpp's per-element loop).
-struct ElementLighting {
-    vec3 direct{0.0f};
-    vec3 indirect{0.0f};
-    vec3 directRadiance{0.0f};
-    vec3 indirectRadiance{0.0f};
-};
-
-// Samples [first, last) of `samples`; their index seeds the direct term's strata. `mips`
-// null: no indirect light.
-VL_HOSTDEV inline ElementLighting shadeReceiverElement(const TraceSceneView& scene, const BvhView& bvh,
-                                                       const MipView* mips, const ConeSet& set,
-                                                       const ConeSettings& cone, const DirectLightSettings& direct,
-                                                       const SurfaceSample* samples, uint32_t first, uint32_t last) {
-    ElementLighting out;
-    for (uint32_t i = first; i < last; ++i) {
-        const SurfaceSample& r = samples[i];
-        const vec3 ed = directIrradiance(scene, bvh, r, direct, i) * kInvPi;
-        const vec3 ei = mips ? coneTraceIrradiance(*mips, r.position, r.normal, set, cone) * kInvPi : vec3(0.0f);
-        out.direct += r.weight * ed;
-        out.indirect += r.weight * ei;
-        out.directRadiance += r.weight * r.albedo * ed;
-        out.indirectRadiance += r.weight * r.albedo * ei;
-    }
-    return out;
-}
+// The bake receiver element is bake/shade_element.h's shadeReceiverElement.
+using vl::ElementLighting;
+using vl::shadeReceiverElement;
 
 }  // namespace vl::cuda

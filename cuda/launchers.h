@@ -43,7 +43,7 @@ LightingStats lightVoxelsCuda(const Scene& scene, VoxelScene& voxels, const Ligh
 // shadeReceivers on the GPU.
 ReceiverLighting shadeReceiversCuda(const SurfaceSampleSet& receivers, const TraceSceneView& scene,
                                     const BvhView& bvh, const MipView* mips, const ConeSettings& cone,
-                                    const DirectLightSettings& direct);
+                                    const DirectLightSettings& direct, bool mayBeBuried);
 
 // renderCamera and traceIrradiance on the GPU; thread (x, y) = (blockIdx·blockDim +
 // threadIdx) per axis is pixel or texel (x, y) (ERRATA eq. 7–8).

@@ -18,7 +18,7 @@ void shadeVoxelsCuda(const lighting::LightingView&, uint32_t, bool, lighting::Vo
 LightingStats lightVoxelsCuda(const Scene&, VoxelScene&, const LightingSettings&) { noDevice(); }
 
 ReceiverLighting shadeReceiversCuda(const SurfaceSampleSet&, const TraceSceneView&, const BvhView&, const MipView*,
-                                    const ConeSettings&, const DirectLightSettings&) {
+                                    const ConeSettings&, const DirectLightSettings&, bool) {
     noDevice();
 }
 

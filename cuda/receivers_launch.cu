@@ -9,21 +9,21 @@ namespace vl::cuda {
 namespace {
 
 __global__ void shadeReceiversKernel(TraceSceneView scene, BvhView bvh, MipView mips, int hasMips, ConeSet set,
-                                     ConeSettings cone, DirectLightSettings direct, const uint32_t* begin,
+                                     ConeSettings cone, DirectLightSettings direct, int mayBeBuried, const uint32_t* begin,
                                      const SurfaceSample* samples, int width, int height, ElementLighting* out) {
     const int x = static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x);
     const int y = static_cast<int>(blockIdx.y * blockDim.y + threadIdx.y);
     if (x >= width || y >= height) return;
     const size_t e = static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x);
     out[e] = shadeReceiverElement(scene, bvh, hasMips ? &mips : nullptr, set, cone, direct, samples, begin[e],
-                                  begin[e + 1]);
+                                  begin[e + 1], mayBeBuried != 0);
 }
 
 }  // namespace
 
 ReceiverLighting shadeReceiversCuda(const SurfaceSampleSet& receivers, const TraceSceneView& scene,
                                     const BvhView& bvh, const MipView* mips, const ConeSettings& cone,
-                                    const DirectLightSettings& direct) {
+                                    const DirectLightSettings& direct, bool mayBeBuried) {
     requireDevice();
     const size_t elements = receivers.elementCount();
     if (receivers.begin.size() != elements + 1)
@@ -44,7 +44,7 @@ ReceiverLighting shadeReceiversCuda(const SurfaceSampleSet& receivers, const Tra
 
     const dim3 threads(16, 8);
     shadeReceiversKernel<<<imageBlocks(receivers.width, receivers.height, threads), threads>>>(
-        deviceScene, deviceBvh, deviceMips, mips ? 1 : 0, coneSet(cone.coneCount), cone, direct, begin.get(),
+        deviceScene, deviceBvh, deviceMips, mips ? 1 : 0, coneSet(cone.coneCount), cone, direct, mayBeBuried ? 1 : 0, begin.get(),
         samples.get(), receivers.width, receivers.height, results.get());
     finishKernels("receiver shading kernel");
 

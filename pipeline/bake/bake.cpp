@@ -119,9 +119,12 @@ BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& d
     // Voxel lighting and receiver shading run on the GPU when the settings pick it.
     const bool onGpu = cuda::resolveDevice(settings.device, std::cerr);
     const auto shade = [&](const SurfaceSampleSet& receivers, const TraceSceneView& sceneView, const BvhView& bvhView,
-                           const MipView& mipView, Progress& progress) {
-        if (onGpu) return cuda::shadeReceiversCuda(receivers, sceneView, bvhView, &mipView, settings.cone, settings.direct);
-        return shadeReceivers(receivers, sceneView, bvhView, &mipView, settings.cone, settings.direct, &progress);
+                           const MipView& mipView, bool mayBeBuried, Progress& progress) {
+        if (onGpu)
+            return cuda::shadeReceiversCuda(receivers, sceneView, bvhView, &mipView, settings.cone, settings.direct,
+                                            mayBeBuried);
+        return shadeReceivers(receivers, sceneView, bvhView, &mipView, settings.cone, settings.direct, mayBeBuried,
+                              &progress);
     };
 
     BakeResult result;
@@ -135,7 +138,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& d
         return lightVoxels(scene, result.voxels, settings.lighting, &progress);
     });
     timed(result.stages, "bounces", [&] {
-        propagateBounces(result.voxels, settings.cone, settings.bounces);
+        propagateBounces(result.voxels, bounceConeSettings(settings), settings.bounces);
         return 0;
     });
     result.mips = timed(result.stages, "mips", [&] { return buildRadianceMips(result.voxels); });
@@ -151,7 +154,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& d
         timed(result.stages, "lightmaps", [&] {
             for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, settings.lightmap, diagnostics)) {
                 Progress progress("lightmap " + atlas.name, atlas.receivers.elementCount(), settings.quiet);
-                const ReceiverLighting lit = shade(atlas.receivers, sceneView, bvhView, mipView, progress);
+                const ReceiverLighting lit = shade(atlas.receivers, sceneView, bvhView, mipView, true, progress);
                 progress.finish();
                 BakedLightmap baked{atlas.name, sumRgb(lit.direct, lit.indirect), lit.direct, lit.indirect, atlas.mask,
                                     atlas.coveredTexels};
@@ -174,7 +177,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& d
                 const CameraReceivers receivers = buildCameraReceivers(traceScene, bvh, model, settings.imageSubsamples,
                                                                        kEmissionSubsamples);
                 Progress progress("image", receivers.receivers.elementCount(), settings.quiet);
-                const ReceiverLighting lit = shade(receivers.receivers, sceneView, bvhView, mipView, progress);
+                const ReceiverLighting lit = shade(receivers.receivers, sceneView, bvhView, mipView, false, progress);
                 progress.finish();
                 result.images.push_back({camera.name,
                                          sumRgb(sumRgb(receivers.emission, lit.directRadiance), lit.indirectRadiance),

@@ -51,7 +51,7 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
              s.lighting.traversal = parseBoolSetting("hdda", v) ? VisibilityTraversal::Hdda : VisibilityTraversal::Dda;
          }},
         // Cone tracing
-        {"cones", "cones per hemisphere: 6, 16 or 32 (default 16)",
+        {"cones", "cones per hemisphere of the receivers' final gather: 6, 16 or 32 (default 32)",
          [](S& s, const std::string& v) { s.cone.coneCount = parseIntSetting("cones", v, 1, 64); }},
         {"aperture", "cone half-angle in degrees; 0 = the cone set's tiling angle (default 0)",
          [](S& s, const std::string& v) { s.cone.apertureDegrees = static_cast<float>(parseRealSetting("aperture", v, 0, 89.9)); }},
@@ -61,8 +61,10 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.cone.stepFactor = static_cast<float>(parseRealSetting("step-factor", v, 0.05, 4)); }},
         {"cone-max-distance", "metres a cone marches at most; 0 = until opaque or out of the grid (default 0)",
          [](S& s, const std::string& v) { s.cone.maxDistance = static_cast<float>(parseRealSetting("cone-max-distance", v, 0, 1e9)); }},
-        {"bounces", "voxel-to-voxel bounces before the final gather (default 4)",
+        {"bounces", "voxel-to-voxel bounces before the final gather (default 8)",
          [](S& s, const std::string& v) { s.bounces = parseIntSetting("bounces", v, 0, 1024); }},
+        {"bounce-cones", "cones per hemisphere of the voxel-to-voxel bounces: 6, 16 or 32 (default 6)",
+         [](S& s, const std::string& v) { s.bounceCones = parseIntSetting("bounce-cones", v, 1, 64); }},
         // Receivers
         {"lightmap-res", "lightmap atlas width and height in texels (default 256)",
          [](S& s, const std::string& v) {
@@ -92,8 +94,15 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
     return table;
 }
 
+ConeSettings bounceConeSettings(const BakeSettings& settings) {
+    ConeSettings bounce = settings.cone;
+    bounce.coneCount = settings.bounceCones;
+    return bounce;
+}
+
 void validateBakeSettings(const BakeSettings& s) {
     validateConeSettings(s.cone, "bake settings");
+    validateConeSettings(bounceConeSettings(s), "bake settings (bounce-cones)");
     s.lightmap.validate();
     if (s.voxel.resolution < 1) throw SettingsError("setting resolution = " + std::to_string(s.voxel.resolution) + " must be at least 1");
     if (s.voxel.voxelSize < 0.0 || !std::isfinite(s.voxel.voxelSize))
@@ -109,7 +118,7 @@ std::string describeBakeSettings(const BakeSettings& s) {
         << ", fill-interior=" << s.voxel.fillInterior << ", normal-weights=" << toString(s.lighting.normalWeights)
         << ", hdda=" << (s.lighting.traversal == VisibilityTraversal::Hdda) << ", cones=" << s.cone.coneCount
         << ", aperture=" << s.cone.apertureDegrees << ", cone-offset=" << s.cone.startOffset
-        << ", step-factor=" << s.cone.stepFactor << ", bounces=" << s.bounces << ", lightmap-res=" << s.lightmap.width
+        << ", step-factor=" << s.cone.stepFactor << ", bounces=" << s.bounces << ", bounce-cones=" << s.bounceCones << ", lightmap-res=" << s.lightmap.width
         << ", lightmap-subsamples=" << s.lightmap.subsamplesPerAxis << ", emitter-strata=" << s.direct.emitterStrata
         << ", width=" << s.imageWidth << ", height=" << s.imageHeight;
     if (s.lighting.attenuation)

@@ -22,9 +22,10 @@ struct ReceiverLighting {
     Image indirectRadiance;  // RGB Σ w·albedo·E_indirect/π
 };
 
-// `mips` may be null (no indirect light: direct only).
+// `mips` may be null (no indirect light: direct only). `mayBeBuried`: the receivers are
+// lightmap texels, which can lie inside closed geometry (shade_element.h isBuried).
 ReceiverLighting shadeReceivers(const SurfaceSampleSet& receivers, const TraceSceneView& scene, const BvhView& bvh,
                                 const MipView* mips, const ConeSettings& cone, const DirectLightSettings& direct,
-                                Progress* progress = nullptr);
+                                bool mayBeBuried, Progress* progress = nullptr);
 
 }  // namespace vl

@@ -63,7 +63,8 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
         tbb::parallel_for(tbb::blocked_range<size_t>(0, voxels.size()), [&](const tbb::blocked_range<size_t>& range) {
             for (size_t i = range.begin(); i != range.end(); ++i) {
                 vec3 e[6];
-                faceIrradiance(view, voxels.centre(i), voxels.normal[i], voxels.axisWeights[i].data(), set, settings, e);
+                faceIrradiance(view, voxels.centre(i), voxels.normal[i], voxels.axisWeights[i].data(), set, settings, e,
+                               coneTurn(i));
                 const vec3 reflectance = voxels.albedo[i] * kInvPi;
                 for (size_t f = 0; f < 6; ++f) next[i][f] = lit[i][f] + reflectance * e[f];
             }

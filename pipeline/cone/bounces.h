@@ -29,14 +29,15 @@
 namespace vl {
 
 // Irradiance at each face of a voxel (see above): faces of one side get that side's E,
-// faces without surface zero. axisWeights: +X, −X, +Y, −Y, +Z, −Z.
+// faces without surface zero. axisWeights: +X, −X, +Y, −Y, +Z, −Z. `turn`: the cone set's
+// rotation (coneTurn of the voxel's index in propagateBounces).
 VL_HOSTDEV inline void faceIrradiance(const MipView& mips, const vec3& centre, const vec3& normal,
                                       const float* axisWeights, const ConeSet& set, const ConeSettings& settings,
-                                      vec3 (&faces)[6]) {
+                                      vec3 (&faces)[6], float turn = 0.0f) {
     const VoxelSides sides = voxelSides(normal, axisWeights);
     vec3 gathered[6];
     for (int s = 0; s < sides.count; ++s)
-        gathered[s] = coneTraceIrradiance(mips, centre, sides.normal[s], set, settings);
+        gathered[s] = coneTraceIrradiance(mips, centre, sides.normal[s], set, settings, nullptr, turn);
     for (int f = 0; f < 6; ++f) faces[f] = sides.sideOfFace[f] >= 0 ? gathered[sides.sideOfFace[f]] : vec3(0.0f);
 }
 

@@ -29,6 +29,7 @@
 #include "cone/cone_set.h"
 #include "cone/cone_settings.h"
 #include "cone/radiance_mips.h"
+#include "core/rng.h"
 
 namespace vl {
 
@@ -229,14 +230,27 @@ VL_HOSTDEV inline float coneHalfAngle(const ConeSet& set, const ConeSettings& se
 // Irradiance E at point p with normal n: π Σ_k w_k L_k over the set's cones around n, all
 // starting settings.startOffset voxels along n. A zero or non-finite n or p gives zero.
 // `occlusion`, if given, receives Σ_k w_k A_k (cosine-weighted ambient occlusion).
+// `turn` (in turns, [0, 1)) rotates the set about n. Why: a fixed set sees a small bright
+// region (a light's hot spot on the ceiling) fully when a cone points at it and barely
+// between cones, so every receiver with the same frame makes the same mistake and the errors
+// form blotches. Receivers that turn their sets differently (coneTurn) make independent
+// mistakes, which the mips average away (bounces) or a pixel's sub-samples average.
 VL_HOSTDEV inline vec3 coneTraceIrradiance(const MipView& mips, const vec3& p, const vec3& n, const ConeSet& set,
-                                           const ConeSettings& settings, float* occlusion = nullptr) {
+                                           const ConeSettings& settings, float* occlusion = nullptr,
+                                           float turn = 0.0f) {
     if (occlusion) *occlusion = 0.0f;
     const float length = glm::length(n);
     if (!(length > 1.0e-6f) || !isFinite(length) || !isFinite(p)) return vec3(0.0f);
     const vec3 normal = n / length;
     vec3 tangent, bitangent;
     orthonormalBasis(normal, tangent, bitangent);
+    if (turn != 0.0f) {
+        const float angle = 2.0f * kPi * turn;
+        const float c = cosf(angle), s = sinf(angle);
+        const vec3 turned = c * tangent + s * bitangent;
+        bitangent = glm::cross(normal, turned);
+        tangent = turned;
+    }
     const float tanHalfAngle = glm::tan(coneHalfAngle(set, settings));
     const vec3 apex = p + normal * (settings.startOffset * mips.voxelSize);
     vec3 sum(0.0f);
@@ -254,6 +268,12 @@ VL_HOSTDEV inline vec3 coneTraceIrradiance(const MipView& mips, const vec3& p, c
     }
     if (occlusion) *occlusion = occluded;
     return kPi * sum;
+}
+
+// A receiver's turn of the cone set: a hash of its index, uniform in [0, 1), the same at
+// any thread count.
+VL_HOSTDEV inline float coneTurn(uint64_t receiverIndex) {
+    return float(splitMix64(receiverIndex) >> 40) * 0x1.0p-24f;
 }
 
 }  // namespace vl

@@ -66,31 +66,55 @@ Scene twoRooms(float wallThickness) {
 
 }  // namespace
 
-TEST_CASE("The default bake of the Cycles Cornell box matches Cycles' 4096-spp lightmap", "[bake]") {
+// Issue 5's bounds against the Cycles references (4096 spp, 64 bounces) of both Blender
+// Cornell boxes at the default settings: lightmap total (covered texels) and camera image
+// (the emitter, reference > 5, excluded) within 10% relative RMSE, the indirect part alone
+// (Cycles' total − direct: its converged path-traced indirect) within 20%. Measured at the
+// defaults (quad / point): lightmap 6.6% / 8.9%, image 8.9% / 9.5%, indirect 14.1% / 18.2%.
+TEST_CASE("The default bake of the Cycles Cornell boxes matches Cycles' lightmaps and renders", "[bake]") {
     VL_SKIP_WITHOUT_SHARED();
     const std::string dir = sharedDir() + "/reference/";
-    Scene scene = loadGltf(dir + "cornell_quad.gltf");
-    Diagnostics diagnostics;
-    const BakeResult result = bake(scene, quietSettings(), diagnostics);
-    REQUIRE(result.lightmaps.size() == 1);
-    const BakedLightmap& ours = result.lightmaps[0];
+    for (const std::string name : {"quad", "point"}) {
+        INFO("cornell_" << name);
+        Scene scene = loadGltf(dir + "cornell_" + name + ".gltf");
+        BakeSettings settings = quietSettings();
+        settings.outputs.images = true;
+        Diagnostics diagnostics;
+        const BakeResult result = bake(scene, settings, diagnostics);
+        REQUIRE(result.lightmaps.size() == 1);
+        REQUIRE(result.images.size() == 1);
+        const BakedLightmap& ours = result.lightmaps[0];
 
-    const Image reference = readImage(dir + "cycles/cornell_quad_lightmap_4096spp.exr");
-    const Image referenceDirect = readImage(dir + "cycles/cornell_quad_lightmap_direct_4096spp.exr");
-    const Image mask = readImage(dir + "cycles/cornell_quad_lightmap_mask.exr");
-    MetricOptions options;
-    options.mask = &mask;
-    const ErrorMetrics total = compareImages(ours.total, reference, options);
-    const ErrorMetrics direct = compareImages(ours.direct, referenceDirect, options);
-    INFO("total relRMSE " << total.relativeRmse << ", direct relRMSE " << direct.relativeRmse);
-    // Direct light is exact up to the emitter's stratified penumbrae and Cycles' own noise
-    // (Cycles' 1024-spp lightmap shows 2.2% against the same reference).
-    CHECK(direct.relativeRmse < 0.03);
-    for (int c = 0; c < 3; ++c) CHECK(direct.meanTest[c] == Approx(direct.meanReference[c]).epsilon(0.005));
-    // Issue 5's bound on the total: 10% relative RMSE (measured 9.1% at the defaults, channel
-    // means +0.4…+3%).
-    CHECK(total.relativeRmse < 0.10);
-    for (int c = 0; c < 3; ++c) CHECK(total.meanTest[c] == Approx(total.meanReference[c]).epsilon(0.05));
+        const std::string cycles = dir + "cycles/cornell_" + name;
+        const Image reference = readImage(cycles + "_lightmap_4096spp.exr");
+        const Image referenceDirect = readImage(cycles + "_lightmap_direct_4096spp.exr");
+        Image referenceIndirect = reference;
+        for (size_t k = 0; k < referenceIndirect.pixels.size(); ++k)
+            referenceIndirect.pixels[k] -= referenceDirect.pixels[k];
+        const Image mask = readImage(cycles + "_lightmap_mask.exr");
+        MetricOptions options;
+        options.mask = &mask;
+        const ErrorMetrics total = compareImages(ours.total, reference, options);
+        const ErrorMetrics direct = compareImages(ours.direct, referenceDirect, options);
+        const ErrorMetrics indirect = compareImages(ours.indirect, referenceIndirect, options);
+        MetricOptions renderOptions;
+        renderOptions.excludeReferenceAbove = 5.0f;
+        const ErrorMetrics image =
+            compareImages(result.images[0].beauty, readImage(cycles + "_render_4096spp.exr"), renderOptions);
+        INFO("lightmap total relRMSE " << total.relativeRmse << ", direct " << direct.relativeRmse << ", indirect "
+                                       << indirect.relativeRmse << ", image " << image.relativeRmse);
+        // Direct light is exact up to the emitter's stratified penumbrae and Cycles' own noise
+        // (Cycles' 1024-spp lightmap shows 2.2% against the same reference).
+        CHECK(direct.relativeRmse < 0.03);
+        for (int c = 0; c < 3; ++c) CHECK(direct.meanTest[c] == Approx(direct.meanReference[c]).epsilon(0.005));
+        CHECK(total.relativeRmse < 0.10);
+        CHECK(indirect.relativeRmse < 0.20);
+        CHECK(image.relativeRmse < 0.10);
+        for (int c = 0; c < 3; ++c) {
+            CHECK(total.meanTest[c] == Approx(total.meanReference[c]).epsilon(0.05));
+            CHECK(image.meanTest[c] == Approx(image.meanReference[c]).epsilon(0.05));
+        }
+    }
 }
 
 TEST_CASE("Light does not leak through a wall between a lit and a dark room", "[bake]") {

@@ -173,7 +173,7 @@ TEST_CASE("Without a usable GPU --device cuda and every launcher are clear error
     CHECK_THROWS_WITH(cuda::renderCameraCuda(c.trace, c.bvh, cornellCamera(4), settings), expected);
     CHECK_THROWS_WITH(cuda::traceIrradianceCuda(c.trace, c.bvh, c.atlases.front().receivers, settings), expected);
     CHECK_THROWS_WITH(cuda::shadeReceiversCuda(c.atlases.front().receivers, c.trace.view(), c.bvh.view(), nullptr,
-                                               ConeSettings{}, DirectLightSettings{}),
+                                               ConeSettings{}, DirectLightSettings{}, true),
                       expected);
     VoxelScene voxels = c.voxels;
     CHECK_THROWS_WITH(cuda::lightVoxelsCuda(c.scene, voxels, LightingSettings{}), expected);
@@ -248,7 +248,7 @@ TEST_CASE("The GPU receiver kernel run on the host equals shadeReceivers bit for
     const MipView mipView = mips.view();
     const ConeSettings cone;
     const DirectLightSettings direct;
-    const ReceiverLighting cpu = shadeReceivers(receivers, c.trace.view(), c.bvh.view(), &mipView, cone, direct);
+    const ReceiverLighting cpu = shadeReceivers(receivers, c.trace.view(), c.bvh.view(), &mipView, cone, direct, true);
     ReceiverLighting host;
     for (Image* image : {&host.direct, &host.indirect, &host.directRadiance, &host.indirectRadiance})
         *image = Image(receivers.width, receivers.height, 3);
@@ -256,7 +256,7 @@ TEST_CASE("The GPU receiver kernel run on the host equals shadeReceivers bit for
     for (size_t e = 0; e < receivers.elementCount(); ++e) {
         const cuda::ElementLighting l =
             cuda::shadeReceiverElement(c.trace.view(), c.bvh.view(), &mipView, set, cone, direct,
-                                       receivers.samples.data(), receivers.begin[e], receivers.begin[e + 1]);
+                                       receivers.samples.data(), receivers.begin[e], receivers.begin[e + 1], true);
         const int x = int(e % receivers.width), y = int(e / receivers.width);
         host.direct.setRgb(x, y, l.direct);
         host.indirect.setRgb(x, y, l.indirect);
@@ -324,9 +324,9 @@ TEST_CASE("GPU receiver shading agrees with the CPU on the Cornell lightmap", "[
     const RadianceMips mips = buildRadianceMips(c.voxels);
     const MipView mipView = mips.view();
     const ReceiverLighting cpu =
-        shadeReceivers(receivers, c.trace.view(), c.bvh.view(), &mipView, ConeSettings{}, DirectLightSettings{});
-    const ReceiverLighting gpu =
-        cuda::shadeReceiversCuda(receivers, c.trace.view(), c.bvh.view(), &mipView, ConeSettings{}, DirectLightSettings{});
+        shadeReceivers(receivers, c.trace.view(), c.bvh.view(), &mipView, ConeSettings{}, DirectLightSettings{}, true);
+    const ReceiverLighting gpu = cuda::shadeReceiversCuda(receivers, c.trace.view(), c.bvh.view(), &mipView,
+                                                          ConeSettings{}, DirectLightSettings{}, true);
     checkDeterministicAgreement(gpu.direct.pixels, cpu.direct.pixels, "direct");
     checkDeterministicAgreement(gpu.indirect.pixels, cpu.indirect.pixels, "indirect");
 }

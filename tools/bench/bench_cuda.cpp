@@ -32,6 +32,7 @@
 #include <cstring>
 #include <functional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 using namespace vl;
@@ -133,11 +134,12 @@ int main(int argc, char** argv) {
         row("voxel direct light", device.usable,
             [&] { VoxelScene v = voxels; lightVoxels(scene, v, LightingSettings{}); return flatten(v.radiance); },
             [&] { VoxelScene v = voxels; cuda::lightVoxelsCuda(scene, v, LightingSettings{}); return flatten(v.radiance); });
-        for (const auto& [name, receivers] : {std::pair<const char*, const SurfaceSampleSet*>{"receivers: lightmap", &texels},
-                                              {"receivers: image", &pixels.receivers}}) {
+        for (const auto& [name, receivers, lightmap] :
+             {std::tuple<const char*, const SurfaceSampleSet*, bool>{"receivers: lightmap", &texels, true},
+              {"receivers: image", &pixels.receivers, false}}) {
             row(name, device.usable,
-                [&] { return shadeReceivers(*receivers, trace.view(), bvh.view(), &mipView, ConeSettings{}, DirectLightSettings{}).indirect.pixels; },
-                [&] { return cuda::shadeReceiversCuda(*receivers, trace.view(), bvh.view(), &mipView, ConeSettings{}, DirectLightSettings{}).indirect.pixels; });
+                [&] { return shadeReceivers(*receivers, trace.view(), bvh.view(), &mipView, ConeSettings{}, DirectLightSettings{}, lightmap).indirect.pixels; },
+                [&] { return cuda::shadeReceiversCuda(*receivers, trace.view(), bvh.view(), &mipView, ConeSettings{}, DirectLightSettings{}, lightmap).indirect.pixels; });
         }
         row("path tracing: image", device.usable, [&] { return renderCamera(trace, bvh, model, pathSettings).beauty.pixels; },
             [&] { return cuda::renderCameraCuda(trace, bvh, model, pathSettings).beauty.pixels; });

@@ -1,0 +1,81 @@
+// One bake receiver element (a lightmap texel or a pixel): the exact direct term and the
+// cone-traced indirect term as E/π, plain and times the samples' albedo. Written once for
+// shadeReceivers (TBB) and the CUDA launcher.
+#pragma once
+
+#include "bake/direct_light.h"
+#include "cone/cone_set.h"
+#include "cone/cone_trace.h"
+#include "core/sampling.h"
+#include "trace/bvh_traverse.h"
+#include "trace/ray_offset.h"
+#include "trace/trace_scene.h"
+#include "trace/surface_samples.h"
+
+#include <cstdint>
+
+namespace vl {
+
+// A receiver inside closed geometry (a floor texel under a block standing on it) gets no
+// light, but the voxels cannot tell: its cones start above the surface, inside the block,
+// and gather light through the block's one-voxel walls at coarse levels. The exact
+// geometry can: probe rays from such a point meet the inside (the back) of the enclosing
+// surfaces. A sample is buried when more than half of kBuriedProbeRays cosine-distributed
+// rays first hit a surface from behind its shading normal; it then gets no indirect light
+// (its direct term, from shadow rays, is already zero). The majority rule keeps an open
+// receiver open where a few surfaces face away from it (an exporter's flipped wall).
+constexpr int kBuriedProbesPerAxis = 4;
+constexpr int kBuriedProbeRays = kBuriedProbesPerAxis * kBuriedProbesPerAxis;
+
+VL_HOSTDEV inline bool isBuried(const TraceSceneView& scene, const BvhView& bvh, const SurfaceSample& r) {
+    vec3 tangent, bitangent;
+    orthonormalBasis(r.normal, tangent, bitangent);
+    Ray ray;
+    ray.origin = offsetRayOrigin(r.position, r.normal);
+    int fromBehind = 0;
+    for (int a = 0; a < kBuriedProbesPerAxis; ++a)
+        for (int b = 0; b < kBuriedProbesPerAxis; ++b) {
+            const vec3 d = sampleCosineHemisphere(
+                vec2((float(a) + 0.5f) / kBuriedProbesPerAxis, (float(b) + 0.5f) / kBuriedProbesPerAxis));
+            ray.direction = d.x * tangent + d.y * bitangent + d.z * r.normal;
+            Hit hit;
+            if (!intersectClosest(bvh, ray, hit)) continue;
+            const vec3* n = scene.normals + 3 * size_t(hit.triangle);
+            const vec3 normal = (1.0f - hit.b1 - hit.b2) * n[0] + hit.b1 * n[1] + hit.b2 * n[2];
+            if (glm::dot(normal, ray.direction) > 0.0f) ++fromBehind;
+        }
+    return 2 * fromBehind > kBuriedProbeRays;
+}
+
+struct ElementLighting {
+    vec3 direct{0.0f};
+    vec3 indirect{0.0f};
+    vec3 directRadiance{0.0f};
+    vec3 indirectRadiance{0.0f};
+};
+
+// Samples [first, last) of `samples`; a sample's index seeds its direct term's strata and
+// turns its cone set (coneTurn), so the sub-samples of one pixel average differently turned
+// sets. `mips` null: no indirect light. `mayBeBuried`: lightmap texels, which can lie inside closed
+// geometry (isBuried: then no indirect light either); camera hits are seen, so never buried.
+VL_HOSTDEV inline ElementLighting shadeReceiverElement(const TraceSceneView& scene, const BvhView& bvh,
+                                                       const MipView* mips, const ConeSet& set,
+                                                       const ConeSettings& cone, const DirectLightSettings& direct,
+                                                       const SurfaceSample* samples, uint32_t first, uint32_t last,
+                                                       bool mayBeBuried) {
+    ElementLighting out;
+    for (uint32_t i = first; i < last; ++i) {
+        const SurfaceSample& r = samples[i];
+        const vec3 ed = directIrradiance(scene, bvh, r, direct, i) * kInvPi;
+        const vec3 ei =
+            mips && !(mayBeBuried && isBuried(scene, bvh, r)) ? coneTraceIrradiance(*mips, r.position, r.normal, set, cone, nullptr, coneTurn(i)) * kInvPi
+                 : vec3(0.0f);
+        out.direct += r.weight * ed;
+        out.indirect += r.weight * ei;
+        out.directRadiance += r.weight * r.albedo * ed;
+        out.indirectRadiance += r.weight * r.albedo * ei;
+    }
+    return out;
+}
+
+}  // namespace vl
