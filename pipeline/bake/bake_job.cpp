@@ -92,7 +92,7 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
     options.strict = settings.strict;
     Scene scene = loadGltf(job.scenePath, options);
     report.stages.push_back({"load", std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count()});
-    for (const Light& light : job.addedLights) scene.lights.push_back(light);
+    addJobLightsAndCameras(job, scene);
     report.triangles = scene.triangleCount();
 
     BakeResult result = bake(scene, settings, diagnostics);
@@ -162,6 +162,11 @@ BakeReport runBake(const BakeJob& job) {
     }
     report.peakMemoryBytes = peakResidentBytes();
     return report;
+}
+
+void addJobLightsAndCameras(const BakeJob& job, Scene& scene) {
+    scene.lights.insert(scene.lights.end(), job.addedLights.begin(), job.addedLights.end());
+    scene.cameras.insert(scene.cameras.end(), job.addedCameras.begin(), job.addedCameras.end());
 }
 
 }  // namespace vl

@@ -15,8 +15,12 @@ struct BakeJob {
     std::string scenePath;
     std::string outputDir;           // e.g. output/<scene name>
     BakeSettings settings;
-    std::vector<Light> addedLights;  // lights a job file adds to the scene
+    std::vector<Light> addedLights;    // lights a job file adds to the scene
+    std::vector<Camera> addedCameras;  // cameras a job file adds (a level exported without one)
 };
+
+// The loaded scene with the job's added lights and cameras.
+void addJobLightsAndCameras(const BakeJob& job, Scene& scene);
 
 struct BakeReport {
     std::string scenePath;

@@ -64,6 +64,9 @@ std::string referenceKey(const BakeJob& job, const BenchReferenceSettings& setti
             << l.color.z << " " << l.intensity << " " << l.range << " " << l.innerConeAngle << " " << l.outerConeAngle
             << " " << l.position.x << "," << l.position.y << "," << l.position.z << " " << l.direction.x << ","
             << l.direction.y << "," << l.direction.z;
+    for (const Camera& c : job.addedCameras)
+        key << "; camera " << c.position.x << "," << c.position.y << "," << c.position.z << " " << c.forward.x << ","
+            << c.forward.y << "," << c.forward.z << " " << c.up.x << "," << c.up.y << "," << c.up.z << " " << c.yfov;
     return key.str();
 }
 

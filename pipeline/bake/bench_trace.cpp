@@ -12,7 +12,7 @@ BenchTraceScene loadBenchTraceScene(const BakeJob& job) {
     LoadOptions options;
     options.strict = job.settings.strict;
     s.scene = loadGltf(job.scenePath, options);
-    for (const Light& light : job.addedLights) s.scene.lights.push_back(light);
+    addJobLightsAndCameras(job, s.scene);
     s.triangles = gatherTriangles(s.scene);
     s.bvh = Bvh::build(s.triangles);
     s.trace = TraceScene::build(s.scene, s.triangles);

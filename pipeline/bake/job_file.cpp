@@ -81,6 +81,35 @@ Light readLight(const json& object, const std::string& where) {
     return light;
 }
 
+// {"name": "hall", "position": [x, y, z], "target": [x, y, z], "up": [0, 1, 0], "yfov": 0.8}
+// (yfov in radians, as glTF; up defaults to +Y).
+Camera readCamera(const json& object, const std::string& where) {
+    if (!object.is_object()) throw InputError(where + " must be an object");
+    for (const auto& entry : object.items())
+        if (entry.key() != "name" && entry.key() != "position" && entry.key() != "target" && entry.key() != "up" &&
+            entry.key() != "yfov")
+            throw InputError(where + ": unknown key \"" + entry.key() + "\" (known: name, position, target, up, yfov)");
+    Camera camera;
+    camera.name = object.value("name", "added camera");
+    if (!object.contains("position") || !object.contains("target"))
+        throw InputError(where + ": a camera needs a \"position\" and a \"target\"");
+    camera.position = readVec3(object["position"], where + ".position");
+    const vec3 forward = readVec3(object["target"], where + ".target") - camera.position;
+    if (!(glm::length(forward) > 0.0f)) throw InputError(where + ": target equals position");
+    camera.forward = glm::normalize(forward);
+    const vec3 up = object.contains("up") ? readVec3(object["up"], where + ".up") : vec3(0.0f, 1.0f, 0.0f);
+    const vec3 right = glm::cross(camera.forward, up);
+    if (!(glm::length(right) > 1e-6f * glm::length(up))) throw InputError(where + ": up is parallel to the view direction");
+    camera.up = glm::normalize(glm::cross(glm::normalize(right), camera.forward));
+    if (object.contains("yfov")) {
+        if (!object["yfov"].is_number()) throw InputError(where + ".yfov must be a number (radians)");
+        camera.yfov = object["yfov"].get<float>();
+    }
+    if (!(camera.yfov > 0.0f && camera.yfov < kPi))
+        throw InputError(where + ".yfov = " + std::to_string(camera.yfov) + " is outside (0, π) radians");
+    return camera;
+}
+
 // {"name": "walls", "meshes": ["Floor", "BackWall"], "resolution": 512 or [1024, 512]}
 AtlasGroup readAtlasGroup(const json& object, const std::string& where) {
     if (!object.is_object()) throw InputError(where + " must be an object");
@@ -175,6 +204,12 @@ std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& de
                 if (!entry["lights"].is_array()) throw InputError(where + ": \"lights\" must be an array");
                 for (size_t l = 0; l < entry["lights"].size(); ++l)
                     job.addedLights.push_back(readLight(entry["lights"][l], where + ".lights[" + std::to_string(l) + "]"));
+            }
+            if (entry.contains("cameras")) {
+                if (!entry["cameras"].is_array()) throw InputError(where + ": \"cameras\" must be an array");
+                for (size_t c = 0; c < entry["cameras"].size(); ++c)
+                    job.addedCameras.push_back(
+                        readCamera(entry["cameras"][c], where + ".cameras[" + std::to_string(c) + "]"));
             }
             jobs.push_back(std::move(job));
         }

@@ -1,5 +1,5 @@
-// Job files: many scenes in one batch, settings globally or per scene, lights added to
-// scenes that have none, a choice of outputs. Relative paths resolve against the job file.
+// Job files: many scenes in one batch, settings globally or per scene, lights and cameras
+// added to scenes that have none, a choice of outputs. Relative paths resolve against the job file.
 //
 // {
 //   "output": "output",                       // root folder for scenes without "output"
@@ -11,7 +11,9 @@
 //       "settings": { "cones": 32, "images": false },
 //       "atlases": [ { "name": "props", "meshes": ["Chair"], "resolution": [512, 256] } ],  // replaces the global list
 //       "lights": [ { "name": "lamp", "type": "point", "position": [1, 2, 3],
-//                     "color": [1, 1, 1], "intensity": 5 } ] }      // W/sr (W/m² directional)
+//                     "color": [1, 1, 1], "intensity": 5 } ],      // W/sr (W/m² directional)
+//       "cameras": [ { "name": "hall", "position": [0, 1.6, 4], "target": [0, 1, 0],
+//                      "up": [0, 1, 0], "yfov": 0.8 } ] }            // radians; up defaults to +Y
 //   ]
 // }
 #pragma once

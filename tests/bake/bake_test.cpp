@@ -315,6 +315,53 @@ TEST_CASE("Job files set settings globally and per scene and add lights", "[bake
                       Catch::Contains("broken.json") && Catch::Contains("not valid JSON"));
 }
 
+TEST_CASE("Job files add cameras looking from a position at a target", "[bake]") {
+    const fs::path dir = tempDir("job-cameras");
+    const fs::path path = dir / "job.json";
+    std::ofstream(path) << R"({"scenes": [{"path": "level.glb",
+        "cameras": [{"name": "hall", "position": [1, 2, 3], "target": [1, 2, -1], "yfov": 0.5},
+                    {"position": [0, 0, 0], "target": [3, 0, 4], "up": [0, 0, 1]}]}]})";
+    const std::vector<BakeJob> jobs = readJobFile(path.string(), BakeSettings{}, "output");
+    REQUIRE(jobs.size() == 1);
+    REQUIRE(jobs[0].addedCameras.size() == 2);
+    const Camera& hall = jobs[0].addedCameras[0];
+    CHECK(hall.name == "hall");
+    CHECK(hall.position == vec3(1, 2, 3));
+    CHECK(hall.forward == vec3(0, 0, -1));
+    CHECK(hall.up == vec3(0, 1, 0));
+    CHECK(hall.yfov == 0.5f);
+    // The second looks along (3, 0, 4)/5; its up is +Z made orthogonal to that (default yfov).
+    const Camera& second = jobs[0].addedCameras[1];
+    CHECK(second.forward.x == Approx(0.6f));
+    CHECK(second.forward.z == Approx(0.8f));
+    CHECK(glm::dot(second.up, second.forward) == Approx(0.0f).margin(1e-6));
+    CHECK(glm::length(second.up) == Approx(1.0f));
+    CHECK(second.up.z > 0.0f);
+    CHECK(second.yfov == Camera{}.yfov);
+
+    Scene scene;
+    addJobLightsAndCameras(jobs[0], scene);
+    CHECK(scene.cameras.size() == 2);
+
+    const auto error = [&](const std::string& camera) {
+        std::ofstream(dir / "bad.json") << R"({"scenes": [{"path": "a.gltf", "cameras": [)" + camera + "]}]}";
+        try {
+            readJobFile((dir / "bad.json").string(), BakeSettings{}, "output");
+        } catch (const InputError& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    const std::string where = (dir / "bad.json").string() + ": scenes[0].cameras[0]";
+    CHECK_THAT(error(R"({"position": [0, 0, 0]})"), Catch::StartsWith(where) && Catch::Contains("needs a \"position\" and a \"target\""));
+    CHECK_THAT(error(R"({"position": [1, 1, 1], "target": [1, 1, 1]})"), Catch::StartsWith(where) && Catch::Contains("target equals position"));
+    CHECK_THAT(error(R"({"position": [0, 0, 0], "target": [0, 1, 0]})"), Catch::StartsWith(where) && Catch::Contains("parallel"));
+    CHECK_THAT(error(R"({"position": [0, 0, 0], "target": [0, 0, 1], "yfov": 4})"), Catch::StartsWith(where) && Catch::Contains("yfov"));
+    CHECK_THAT(error(R"({"position": [0, 0, 0], "target": [0, 0, 1], "yfov": "wide"})"), Catch::StartsWith(where) && Catch::Contains("yfov must be a number"));
+    CHECK_THAT(error(R"({"position": [0, 0, 0], "target": [0, 0, 1], "fov": 1})"), Catch::StartsWith(where) && Catch::Contains("unknown key \"fov\""));
+    CHECK_THAT(error(R"({"position": [0, "x", 0], "target": [0, 0, 1]})"), Catch::StartsWith(where) && Catch::Contains("position"));
+}
+
 namespace {
 
 // What readJobFile throws (as E) for a job file with this text.
