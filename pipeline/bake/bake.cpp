@@ -138,7 +138,8 @@ BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& d
         return lightVoxels(scene, result.voxels, settings.lighting, &progress);
     });
     timed(result.stages, "bounces", [&] {
-        propagateBounces(result.voxels, bounceConeSettings(settings), settings.bounces);
+        Progress progress("bounces", uint64_t(settings.bounces) * result.voxels.size(), settings.quiet);
+        propagateBounces(result.voxels, bounceConeSettings(settings), settings.bounces, &progress);
         return 0;
     });
     result.mips = timed(result.stages, "mips", [&] { return buildRadianceMips(result.voxels); });

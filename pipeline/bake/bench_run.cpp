@@ -203,21 +203,21 @@ std::vector<BenchPointSpec> benchSweep(bool full) {
     vct("default", {});
     if (full) {
         each("resolution", {"32", "64", "96", "192", "256"});
-        each("cones", {"6", "32"});
+        each("cones", {"6", "16"});
         each("aperture", {"15", "30", "45"});
         each("step-factor", {"0.25", "1"});
         each("cone-offset", {"0.75", "3"});
         each("normal-weights", {"lambert", "villegas"});
-        each("bounces", {"0", "1", "3"});
-        vct("resolution=64 cones=6", {{"resolution", "64"}, {"cones", "6"}});
-        vct("resolution=64 cones=6 step-factor=1", {{"resolution", "64"}, {"cones", "6"}, {"step-factor", "1"}});
+        each("bounces", {"0", "1", "2", "4"});
+        each("bounce-cones", {"16"});
+        vct("resolution=64 cones=16", {{"resolution", "64"}, {"cones", "16"}});
+        vct("resolution=64 cones=16 step-factor=1", {{"resolution", "64"}, {"cones", "16"}, {"step-factor", "1"}});
     } else {
         each("resolution", {"64", "192"});
-        each("cones", {"6"});
+        each("cones", {"16"});
         each("step-factor", {"1"});
-        each("normal-weights", {"lambert"});
-        each("bounces", {"1"});
-        vct("resolution=64 cones=6", {{"resolution", "64"}, {"cones", "6"}});
+        each("bounces", {"2"});
+        vct("resolution=64 cones=16", {{"resolution", "64"}, {"cones", "16"}});
     }
     const std::vector<int> spp = full ? std::vector<int>{4, 16, 64, 256, 1024} : std::vector<int>{16, 64, 256};
     for (int s : spp) points.push_back({"path", "spp=" + std::to_string(s), {}, s});

@@ -1,6 +1,7 @@
 #include "cone/bounces.h"
 
 #include "core/error.h"
+#include "core/progress.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -45,7 +46,7 @@ std::vector<vec3> isotropic(const VoxelScene& voxels, const std::vector<FaceRadi
 
 }  // namespace
 
-void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces) {
+void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces, Progress* progress) {
     validateConeSettings(settings);
     if (bounces < 0 || bounces > kMaxBounces)
         throw SettingsError("bounces = " + std::to_string(bounces) + " is outside [0, " +
@@ -68,6 +69,7 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
                 const vec3 reflectance = voxels.albedo[i] * kInvPi;
                 for (size_t f = 0; f < 6; ++f) next[i][f] = lit[i][f] + reflectance * e[f];
             }
+            if (progress) progress->advance(range.size());
         });
         current.swap(next);
     }

@@ -28,6 +28,8 @@
 
 namespace vl {
 
+class Progress;
+
 // Irradiance at each face of a voxel (see above): faces of one side get that side's E,
 // faces without surface zero. axisWeights: +X, −X, +Y, −Y, +Z, −Z. `turn`: the cone set's
 // rotation (coneTurn of the voxel's index in propagateBounces).
@@ -44,7 +46,7 @@ VL_HOSTDEV inline void faceIrradiance(const MipView& mips, const vec3& centre, c
 // Replaces voxels.faceRadiance and voxels.radiance with L_bounces. bounces = 0 leaves them
 // unchanged. Throws SettingsError for bounces < 0 or > 1024 or invalid settings, Error when
 // radiance, faceRadiance (when present), albedo, normal, axisWeights, opacity or solid do not
-// match the voxel count.
-void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces);
+// match the voxel count. `progress`, when given, advances once per voxel and bounce.
+void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces, Progress* progress = nullptr);
 
 }  // namespace vl
