@@ -25,15 +25,15 @@ struct BakeSettings {
     LightingSettings lighting;
     // The receivers' final gather: 32 cones. It sees small bright regions (the hot spot a
     // point light makes on a ceiling) directly, and a cone set too sparse for them misses or
-    // doubles them by turns: on the Cycles Cornell boxes 16 cones left the point scene's
-    // lightmap at 13.8% relRMSE and its image at 16.3%.
+    // doubles them by turns: on the Cycles point-light Cornell box 16 cones leave the
+    // lightmap at 13.3% relRMSE and the image at 13.4%, 32 at 8.9% and 9.5% (README).
     ConeSettings cone = ConeSettings{32};
     // Voxel-to-voxel bounces before the final gather (the receiver's gather is one more),
     // each with bounceCones cones. The bounces gather light already spread over many voxels
     // and every voxel turns its set differently (cone_trace.h coneTurn), so 6 cones do: on
     // the Cycles Cornell boxes 8 bounces of 6 cones give lower error (lightmaps 6.6% / 8.9%,
-    // quad / point) than 4 of 16 (7.7% / 9.6%) in half the time. `voxlight bench`
-    // regenerates the sweep.
+    // quad / point) than 4 of 16 (7.7% / 9.6%) in less time (14 s against 17 s on the quad
+    // box, 2 cores). `voxlight bench` regenerates the sweep.
     int bounces = 8;
     int bounceCones = 6;
     LightmapSettings lightmap;
