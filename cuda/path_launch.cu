@@ -1,8 +1,8 @@
 // The path-tracing launchers: thread (x, y) = (blockIdx·blockDim + threadIdx) per axis
 // (ERRATA eq. 7–8) traces every sample of pixel or texel (x, y), seeded as on the CPU.
 #include "cuda/device_views.cuh"
-#include "cuda/element_kernels.h"
 #include "cuda/launchers.h"
+#include "trace/path_elements.h"
 
 #include <chrono>
 
@@ -28,28 +28,14 @@ __global__ void receiverKernel(TraceSceneView scene, BvhView bvh, const uint32_t
     out[e] = receiverElementPaths(scene, bvh, samples + begin[e], begin[e + 1] - begin[e], e, settings);
 }
 
-PathKernelSettings kernelSettings(const PathTracerSettings& settings, uint64_t salt) {
-    PathKernelSettings k;
-    k.samplesPerPixel = settings.samplesPerPixel;
-    k.path = settings.path;
-    k.filter = settings.filter;
-    k.salt = settings.seed ^ salt;
-    return k;
-}
-
 TraceResult collect(const std::vector<PathEstimate>& estimates, int width, int height) {
     TraceResult r;
     for (Image* image : {&r.beauty, &r.direct, &r.indirect, &r.albedo, &r.variance}) *image = Image(width, height, 3);
     for (size_t e = 0; e < estimates.size(); ++e) {
         const int x = static_cast<int>(e % static_cast<size_t>(width));
         const int y = static_cast<int>(e / static_cast<size_t>(width));
-        const PathEstimate& p = estimates[e];
-        r.beauty.setRgb(x, y, p.beauty);
-        r.direct.setRgb(x, y, p.direct);
-        r.indirect.setRgb(x, y, p.indirect);
-        r.albedo.setRgb(x, y, p.albedo);
-        r.variance.setRgb(x, y, p.variance);
-        r.nonFiniteSamples += p.dropped;
+        storeEstimate(r, x, y, estimates[e]);
+        r.nonFiniteSamples += estimates[e].dropped;
     }
     return r;
 }
@@ -75,7 +61,7 @@ TraceResult renderCameraCuda(const TraceScene& scene, const Bvh& bvh, const Came
     DeviceArray<PathEstimate> results(pixels);
     const dim3 threads(16, 8);
     cameraKernel<<<imageBlocks(camera.width, camera.height, threads), threads>>>(
-        deviceScene, deviceBvh, camera, kernelSettings(settings, kCameraSalt), results.get());
+        deviceScene, deviceBvh, camera, pathKernelSettings(settings, kCameraSalt), results.get());
     finishKernels("camera path-tracing kernel");
     TraceResult r = collect(results.toHost(), camera.width, camera.height);
     r.paths = static_cast<uint64_t>(pixels) * static_cast<uint64_t>(settings.samplesPerPixel);
@@ -102,7 +88,7 @@ TraceResult traceIrradianceCuda(const TraceScene& scene, const Bvh& bvh, const S
     const dim3 threads(16, 8);
     receiverKernel<<<imageBlocks(receivers.width, receivers.height, threads), threads>>>(
         deviceScene, deviceBvh, begin.get(), samples.get(), receivers.width, receivers.height,
-        kernelSettings(settings, kReceiverSalt), results.get());
+        pathKernelSettings(settings, kReceiverSalt), results.get());
     finishKernels("lightmap path-tracing kernel");
     TraceResult r = collect(results.toHost(), receivers.width, receivers.height);
     uint64_t covered = 0;

@@ -1,7 +1,7 @@
 // The bake receivers launcher: thread (x, y) shades element (x, y) of the receiver image
 // (exact direct light through the BVH, indirect light by cones through the radiance mips).
 #include "cuda/device_views.cuh"
-#include "cuda/element_kernels.h"
+#include "bake/shade_element.h"
 #include "cuda/launchers.h"
 
 namespace vl::cuda {

@@ -3,7 +3,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "trace/bvh.h"
-#include "trace/sample_patterns.h"
+#include "trace/path_elements.h"
 #include "trace/trace_scene.h"
 
 #include <tbb/blocked_range.h>
@@ -26,39 +26,6 @@ void PathTracerSettings::validate() const {
 
 namespace {
 
-// Running sums of one element's samples, in double so the mean does not depend on the
-// order of summation at thread boundaries (there are none: one element, one thread).
-struct Accumulator {
-    glm::dvec3 beauty{0.0}, beautySq{0.0}, direct{0.0}, indirect{0.0}, albedo{0.0};
-    uint32_t dropped = 0;
-
-    void add(const PathSample& s) {
-        const vec3 total = s.direct + s.indirect;
-        if (!isFinite(total) || !isFinite(s.albedo)) {
-            ++dropped;  // counted as a zero sample: keeps the estimator's divisor
-            return;
-        }
-        const glm::dvec3 t(total);
-        beauty += t;
-        beautySq += t * t;
-        direct += glm::dvec3(s.direct);
-        indirect += glm::dvec3(s.indirect);
-        albedo += glm::dvec3(s.albedo);
-    }
-
-    void store(TraceResult& r, int x, int y, int n) const {
-        const double inv = 1.0 / n;
-        const glm::dvec3 mean = beauty * inv;
-        glm::dvec3 var(0.0);
-        if (n > 1) var = glm::max(glm::dvec3(0.0), (beautySq - beauty * mean) / (double(n) * (n - 1)));
-        r.beauty.setRgb(x, y, vec3(mean));
-        r.direct.setRgb(x, y, vec3(direct * inv));
-        r.indirect.setRgb(x, y, vec3(indirect * inv));
-        r.albedo.setRgb(x, y, vec3(albedo * inv));
-        r.variance.setRgb(x, y, vec3(var));
-    }
-};
-
 TraceResult makeResult(int width, int height) {
     TraceResult r;
     r.beauty = Image(width, height, 3);
@@ -68,12 +35,6 @@ TraceResult makeResult(int width, int height) {
     r.variance = Image(width, height, 3);
     return r;
 }
-
-// Salts keep camera and receiver streams apart even for the same element index.
-constexpr uint64_t kCameraSalt = 0x63616d657261ull;
-constexpr uint64_t kReceiverSalt = 0x7265636569766572ull;
-// The "sample number" that seeds a pixel's pattern rotation, apart from every real sample.
-constexpr uint64_t kPatternSample = ~0ull;
 
 }  // namespace
 
@@ -88,28 +49,16 @@ TraceResult renderCamera(const TraceScene& scene, const Bvh& bvh, const CameraMo
     const TraceSceneView sv = scene.view();
     const BvhView bv = bvh.view();
     const int spp = settings.samplesPerPixel;
-    const uint64_t salt = settings.seed ^ kCameraSalt;
+    const PathKernelSettings kernel = pathKernelSettings(settings, kCameraSalt);
     std::atomic<uint64_t> dropped{0};
     Progress progress("render", static_cast<uint64_t>(camera.height), settings.quiet);
     tbb::parallel_for(tbb::blocked_range<int>(0, camera.height, 1), [&](const tbb::blocked_range<int>& rows) {
         for (int y = rows.begin(); y < rows.end(); ++y) {
             uint64_t rowDropped = 0;
             for (int x = 0; x < camera.width; ++x) {
-                const uint64_t index = static_cast<uint64_t>(y) * camera.width + x;
-                // The pixel's rotation of its stratified pixel and lens patterns.
-                Pcg32 patternRng = Pcg32::forItem(index, kPatternSample, salt);
-                const vec2 pixelShift(patternRng.next1D(), patternRng.next1D());
-                const vec2 lensShift(patternRng.next1D(), patternRng.next1D());
-                Accumulator acc;
-                for (int j = 0; j < spp; ++j) {
-                    Pcg32 rng = Pcg32::forItem(index, static_cast<uint64_t>(j), salt);
-                    const vec2 uPixel = rotatedHammersley(static_cast<uint32_t>(j), static_cast<uint32_t>(spp), pixelShift);
-                    const vec2 uLens = rotatedHalton35(static_cast<uint32_t>(j), lensShift);
-                    const Ray ray = thinLensRay(camera, pixelSamplePoint(x, y, uPixel, settings.filter), uLens);
-                    acc.add(traceCameraPath(sv, bv, ray, rng, settings.path));
-                }
-                acc.store(result, x, y, spp);
-                rowDropped += acc.dropped;
+                const PathEstimate e = cameraPixel(sv, bv, camera, kernel, x, y);
+                storeEstimate(result, x, y, e);
+                rowDropped += e.dropped;
             }
             if (rowDropped) dropped += rowDropped;
             progress.advance();
@@ -133,7 +82,7 @@ TraceResult traceIrradiance(const TraceScene& scene, const Bvh& bvh, const Surfa
     const TraceSceneView sv = scene.view();
     const BvhView bv = bvh.view();
     const int spp = settings.samplesPerPixel;
-    const uint64_t salt = settings.seed ^ kReceiverSalt;
+    const PathKernelSettings kernel = pathKernelSettings(settings, kReceiverSalt);
     const size_t elements = receivers.elementCount();
     uint64_t covered = 0;
     for (size_t i = 0; i < elements; ++i) covered += receivers.covered(i) ? 1 : 0;
@@ -145,28 +94,10 @@ TraceResult traceIrradiance(const TraceScene& scene, const Bvh& bvh, const Surfa
         for (size_t i = range.begin(); i < range.end(); ++i) {
             const uint32_t count = receivers.sampleCount(i);
             if (count == 0) continue;
-            const SurfaceSample* samples = receivers.samples.data() + receivers.begin[i];
-            double totalWeight = 0.0;
-            for (uint32_t k = 0; k < count; ++k) totalWeight += samples[k].weight;
-            Accumulator acc;
-            uint32_t k = 0;
-            double cumulative = samples[0].weight;
-            for (int j = 0; j < spp; ++j) {
-                // Sample j goes to the receiver sample whose cumulative weight interval holds
-                // (j + ½)/spp: each gets a share of the spp in proportion to its weight
-                // (stratified, deterministic). Past the weights' sum lies the background.
-                const double t = (j + 0.5) / spp;
-                while (t >= cumulative && k + 1 < count) cumulative += samples[++k].weight;
-                const bool background = t >= cumulative && totalWeight < 1.0 - 1e-5;
-                if (background) {
-                    acc.add(PathSample{});
-                    continue;
-                }
-                Pcg32 rng = Pcg32::forItem(i, static_cast<uint64_t>(j), salt);
-                acc.add(traceReceiverPath(sv, bv, samples[k], rng, settings.path));
-            }
-            acc.store(result, static_cast<int>(i % receivers.width), static_cast<int>(i / receivers.width), spp);
-            blockDropped += acc.dropped;
+            const PathEstimate e =
+                receiverElementPaths(sv, bv, receivers.samples.data() + receivers.begin[i], count, i, kernel);
+            storeEstimate(result, static_cast<int>(i % receivers.width), static_cast<int>(i / receivers.width), e);
+            blockDropped += e.dropped;
         }
         if (blockDropped) dropped += blockDropped;
         progress.advance(range.size());

@@ -1,17 +1,18 @@
 // The CUDA backend (issue 7). On a machine without a GPU (CI): the device choice falls back
-// to the CPU and says why, --device cuda is a clear error, and the per-element code the GPU
-// threads run is checked bit for bit against the CPU stages on the host, together with the
-// array lengths the launchers copy. On a GPU machine: CPU and GPU agree on the Cornell box
+// to the CPU and says why, --device cuda is a clear error, and the per-element functions the
+// GPU threads run (trace/path_elements.h, bake/shade_element.h, shared with the CPU stages)
+// are run element by element on the host and checked bit for bit against the stages' images,
+// together with the array lengths the launchers copy. On a GPU machine: CPU and GPU agree on the Cornell box
 // within the tolerances written in cuda/launchers.h (these tests skip with a message
 // elsewhere).
 #include "bake/bake.h"
 #include "bake/receivers.h"
+#include "bake/shade_element.h"
 #include "bake/shade_receivers.h"
 #include "cone/radiance_mips.h"
 #include "core/error.h"
 #include "cuda/device.h"
 #include "cuda/device_choice.h"
-#include "cuda/element_kernels.h"
 #include "cuda/launchers.h"
 #include "cuda/view_extents.h"
 #include "lighting/lighting.h"
@@ -19,6 +20,7 @@
 #include "scene/gltf_loader.h"
 #include "support/paths.h"
 #include "trace/bvh.h"
+#include "trace/path_elements.h"
 #include "trace/path_tracer.h"
 #include "trace/trace_scene.h"
 #include "voxel/voxelize.h"
@@ -188,17 +190,13 @@ TEST_CASE("The GPU camera kernel run on the host equals renderCamera bit for bit
     settings.seed = 7;
     settings.quiet = true;
     const TraceResult cpu = renderCamera(c.trace, c.bvh, camera, settings);
-    cuda::PathKernelSettings k;
-    k.samplesPerPixel = settings.samplesPerPixel;
-    k.path = settings.path;
-    k.filter = settings.filter;
-    k.salt = settings.seed ^ cuda::kCameraSalt;
+    const PathKernelSettings k = pathKernelSettings(settings, kCameraSalt);  // what the launcher passes
     TraceResult host;
     for (Image* image : {&host.beauty, &host.direct, &host.indirect, &host.albedo, &host.variance})
         *image = Image(camera.width, camera.height, 3);
     for (int y = 0; y < camera.height; ++y)
         for (int x = 0; x < camera.width; ++x) {
-            const cuda::PathEstimate e = cuda::cameraPixel(c.trace.view(), c.bvh.view(), camera, k, x, y);
+            const PathEstimate e = cameraPixel(c.trace.view(), c.bvh.view(), camera, k, x, y);
             host.beauty.setRgb(x, y, e.beauty);
             host.direct.setRgb(x, y, e.direct);
             host.indirect.setRgb(x, y, e.indirect);
@@ -222,13 +220,10 @@ TEST_CASE("The GPU lightmap path kernel run on the host equals traceIrradiance b
     settings.samplesPerPixel = 4;
     settings.quiet = true;
     const TraceResult cpu = traceIrradiance(c.trace, c.bvh, receivers, settings);
-    cuda::PathKernelSettings k;
-    k.samplesPerPixel = settings.samplesPerPixel;
-    k.path = settings.path;
-    k.salt = settings.seed ^ cuda::kReceiverSalt;
+    const PathKernelSettings k = pathKernelSettings(settings, kReceiverSalt);
     Image beauty(receivers.width, receivers.height, 3), variance(receivers.width, receivers.height, 3);
     for (size_t e = 0; e < receivers.elementCount(); ++e) {
-        const cuda::PathEstimate p = cuda::receiverElementPaths(c.trace.view(), c.bvh.view(),
+        const PathEstimate p = receiverElementPaths(c.trace.view(), c.bvh.view(),
                                                                 receivers.samples.data() + receivers.begin[e],
                                                                 receivers.sampleCount(e), e, k);
         beauty.setRgb(int(e % receivers.width), int(e / receivers.width), p.beauty);
@@ -254,8 +249,8 @@ TEST_CASE("The GPU receiver kernel run on the host equals shadeReceivers bit for
         *image = Image(receivers.width, receivers.height, 3);
     const ConeSet& set = coneSet(cone.coneCount);
     for (size_t e = 0; e < receivers.elementCount(); ++e) {
-        const cuda::ElementLighting l =
-            cuda::shadeReceiverElement(c.trace.view(), c.bvh.view(), &mipView, set, cone, direct,
+        const ElementLighting l =
+            shadeReceiverElement(c.trace.view(), c.bvh.view(), &mipView, set, cone, direct,
                                        receivers.samples.data(), receivers.begin[e], receivers.begin[e + 1], true);
         const int x = int(e % receivers.width), y = int(e / receivers.width);
         host.direct.setRgb(x, y, l.direct);

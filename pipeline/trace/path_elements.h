@@ -1,34 +1,26 @@
-// What one GPU thread computes: one pixel, texel or receiver element, as VL_HOSTDEV
-// functions over the same POD views the CPU stages read. The launchers (*.cu) call them per
-// thread; tests/cuda calls them on the host and checks them bit for bit against the CPU
-// stages (renderCamera, traceIrradiance, shadeReceivers), so the GPU path cannot drift from
-// the CPU one unnoticed on machines without a GPU.
-//
-// The per-element loops of trace/path_tracer.cpp are private to that file; they are
-// mirrored here (same seeds, same order, same double sums). The kernels they call
-// (traceCameraPath, traceReceiverPath) are the stage's own; receiver shading is
-// bake/shade_element.h's, shared with the CPU stage.
+// One pixel or receiver element of the path tracer (ERRATA eq. 7–8: a thread per element),
+// written once for renderCamera / traceIrradiance (TBB) and the CUDA launchers: each
+// element seeds its own generators from its index and sample number, so the result does not
+// depend on the thread count or the device's launch shape.
 #pragma once
 
-#include "bake/direct_light.h"
-#include "bake/shade_element.h"
-#include "cone/cone_set.h"
-#include "cone/cone_trace.h"
 #include "trace/camera.h"
 #include "trace/path_kernels.h"
+#include "trace/path_tracer.h"
 #include "trace/sample_patterns.h"
 #include "trace/surface_samples.h"
 
 #include <cstdint>
 
-namespace vl::cuda {
+namespace vl {
 
-// trace/path_tracer.cpp's stream salts.
+// Salts keep camera and receiver streams apart even for the same element index; the
+// "sample number" kPatternSample seeds a pixel's pattern rotation, apart from every real sample.
 constexpr uint64_t kCameraSalt = 0x63616d657261ull;
 constexpr uint64_t kReceiverSalt = 0x7265636569766572ull;
 constexpr uint64_t kPatternSample = ~0ull;
 
-// One element's estimate, as path_tracer.cpp stores it into TraceResult's images.
+// One element's estimate: what TraceResult's images hold at its pixel (storeEstimate).
 struct PathEstimate {
     vec3 beauty{0.0f};
     vec3 direct{0.0f};
@@ -38,7 +30,8 @@ struct PathEstimate {
     uint32_t dropped = 0;
 };
 
-// The running sums of one element's samples (double, as path_tracer.cpp's Accumulator).
+// The running sums of one element's samples, in double so the mean does not depend on the
+// order of summation. A non-finite sample counts as zero (it keeps the estimator's divisor).
 struct PathAccumulator {
     glm::dvec3 beauty{0.0}, beautySq{0.0}, direct{0.0}, indirect{0.0}, albedo{0.0};
     uint32_t dropped = 0;
@@ -73,7 +66,7 @@ struct PathAccumulator {
     }
 };
 
-// The settings a path kernel reads (PathTracerSettings without its host-only parts).
+// The settings an element reads (PathTracerSettings without its host-only parts).
 struct PathKernelSettings {
     int samplesPerPixel = 1;
     PathSettings path;
@@ -101,7 +94,9 @@ VL_HOSTDEV inline PathEstimate cameraPixel(const TraceSceneView& scene, const Bv
 }
 
 // Receiver element `element` with samples [samples, samples + count): E/π by white-receiver
-// paths, the spp shared among the samples by weight (see traceIrradiance). count 0: zero.
+// paths. Sample j goes to the receiver sample whose cumulative weight interval holds
+// (j + ½)/spp: each gets a share of the spp in proportion to its weight (stratified,
+// deterministic); past the weights' sum lies the background. count 0: zero.
 VL_HOSTDEV inline PathEstimate receiverElementPaths(const TraceSceneView& scene, const BvhView& bvh,
                                                     const SurfaceSample* samples, uint32_t count, uint64_t element,
                                                     const PathKernelSettings& settings) {
@@ -126,8 +121,21 @@ VL_HOSTDEV inline PathEstimate receiverElementPaths(const TraceSceneView& scene,
     return acc.finish(spp);
 }
 
-// The bake receiver element is bake/shade_element.h's shadeReceiverElement.
-using vl::ElementLighting;
-using vl::shadeReceiverElement;
+inline PathKernelSettings pathKernelSettings(const PathTracerSettings& settings, uint64_t salt) {
+    PathKernelSettings k;
+    k.samplesPerPixel = settings.samplesPerPixel;
+    k.path = settings.path;
+    k.filter = settings.filter;
+    k.salt = settings.seed ^ salt;
+    return k;
+}
 
-}  // namespace vl::cuda
+inline void storeEstimate(TraceResult& result, int x, int y, const PathEstimate& e) {
+    result.beauty.setRgb(x, y, e.beauty);
+    result.direct.setRgb(x, y, e.direct);
+    result.indirect.setRgb(x, y, e.indirect);
+    result.albedo.setRgb(x, y, e.albedo);
+    result.variance.setRgb(x, y, e.variance);
+}
+
+}  // namespace vl
