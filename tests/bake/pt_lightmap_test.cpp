@@ -15,6 +15,7 @@
 #include "core/image_io.h"
 #include "metrics/metrics.h"
 #include "scene/gltf_loader.h"
+#include "support/cycles_comparison.h"
 #include "support/paths.h"
 #include "trace/bvh.h"
 #include "trace/path_tracer.h"
@@ -143,14 +144,7 @@ LightmapComparison bakeAndCompare(const std::string& name) {
     return out;
 }
 
-void requireMeansAgree(const LightmapComparison& c) {
-    for (int ch = 0; ch < 3; ++ch) {
-        const double tolerance = 0.01 * c.total.meanReference[ch] + 4.0 * c.sigmaMean[ch];
-        INFO("channel " << ch << ": ours " << c.total.meanTest[ch] << ", Cycles " << c.total.meanReference[ch]
-                        << ", tolerance " << tolerance);
-        REQUIRE(std::abs(c.total.meanTest[ch] - c.total.meanReference[ch]) <= tolerance);
-    }
-}
+void requireMeansAgree(const LightmapComparison& c) { test::requireMeansAgree(c.total, c.sigmaMean); }
 
 }  // namespace
 

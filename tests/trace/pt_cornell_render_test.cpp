@@ -17,6 +17,7 @@
 #include "core/image_io.h"
 #include "metrics/metrics.h"
 #include "scene/gltf_loader.h"
+#include "support/cycles_comparison.h"
 #include "support/paths.h"
 #include "trace/bvh.h"
 #include "trace/path_tracer.h"
@@ -105,14 +106,7 @@ Comparison renderAndCompare(const std::string& name) {
     return out;
 }
 
-void requireMeansAgree(const Comparison& c) {
-    for (int ch = 0; ch < 3; ++ch) {
-        const double tolerance = 0.01 * c.metrics.meanReference[ch] + 4.0 * c.sigmaMean[ch];
-        INFO("channel " << ch << ": ours " << c.metrics.meanTest[ch] << ", Cycles " << c.metrics.meanReference[ch]
-                        << ", tolerance " << tolerance);
-        REQUIRE(std::abs(c.metrics.meanTest[ch] - c.metrics.meanReference[ch]) <= tolerance);
-    }
-}
+void requireMeansAgree(const Comparison& c) { test::requireMeansAgree(c.metrics, c.sigmaMean); }
 
 }  // namespace
 
