@@ -44,6 +44,16 @@ MipView uploadMips(DeviceBuffers& owner, const MipView& host) {
     return d;
 }
 
+IrradianceCacheView uploadCache(DeviceBuffers& owner, const IrradianceCacheView& host, const MipView& deviceMips) {
+    IrradianceCacheView d = host;
+    d.occupancy = deviceMips.levelCount > 0 ? deviceMips.levels[0] : MipLevelView{};
+    d.cells = uploadGrid(owner, host.cells);
+    d.cellBegin = upload(owner, host.cellBegin, cacheCellSlotCount(host) + 1);
+    d.points = upload(owner, host.points, host.pointCount);
+    d.irradiance = upload(owner, host.irradiance, host.pointCount);
+    return d;
+}
+
 lighting::LightingView uploadLighting(DeviceBuffers& owner, const lighting::LightingView& host, uint32_t voxelCount) {
     lighting::LightingView d = host;
     const size_t n = voxelCount;

@@ -3,6 +3,7 @@
 // type is returned with device pointers. `owner` keeps the copies alive.
 #pragma once
 
+#include "cone/irradiance_cache.h"
 #include "cone/radiance_mips.h"
 #include "cuda/device_memory.cuh"
 #include "lighting/lighting_kernels.h"
@@ -27,6 +28,8 @@ const nanovdb::NanoGrid<BuildT>* uploadGrid(DeviceBuffers& owner, const nanovdb:
 TraceSceneView uploadTraceScene(DeviceBuffers& owner, const TraceSceneView& host);
 BvhView uploadBvh(DeviceBuffers& owner, const BvhView& host);
 MipView uploadMips(DeviceBuffers& owner, const MipView& host);
+// The cache's arrays; its occupancy is level 0 of `deviceMips` (already on the device).
+IrradianceCacheView uploadCache(DeviceBuffers& owner, const IrradianceCacheView& host, const MipView& deviceMips);
 lighting::LightingView uploadLighting(DeviceBuffers& owner, const lighting::LightingView& host, uint32_t voxelCount);
 
 }  // namespace vl::cuda

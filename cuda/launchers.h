@@ -21,6 +21,7 @@
 #include "trace/path_tracer.h"
 
 #include <cstdint>
+#include <vector>
 
 namespace vl {
 
@@ -42,8 +43,12 @@ LightingStats lightVoxelsCuda(const Scene& scene, VoxelScene& voxels, const Ligh
 
 // shadeReceivers on the GPU.
 ReceiverLighting shadeReceiversCuda(const SurfaceSampleSet& receivers, const TraceSceneView& scene,
-                                    const BvhView& bvh, const MipView* mips, const ConeSettings& cone,
-                                    const DirectLightSettings& direct, bool mayBeBuried);
+                                    const BvhView& bvh, const MipView* mips, const IrradianceCacheView* cache,
+                                    const ConeSettings& cone, const DirectLightSettings& direct, bool mayBeBuried);
+
+// IrradianceCache::gather on the GPU: the cone-traced irradiance at every gather point.
+std::vector<vec3> gatherIrradianceCuda(const std::vector<GatherPoint>& points, const MipView& mips,
+                                       const ConeSettings& cone, int turns);
 
 // renderCamera and traceIrradiance on the GPU; thread (x, y) = (blockIdx·blockDim +
 // threadIdx) per axis is pixel or texel (x, y) (ERRATA eq. 7–8).

@@ -18,7 +18,11 @@ void shadeVoxelsCuda(const lighting::LightingView&, uint32_t, bool, lighting::Vo
 LightingStats lightVoxelsCuda(const Scene&, VoxelScene&, const LightingSettings&) { noDevice(); }
 
 ReceiverLighting shadeReceiversCuda(const SurfaceSampleSet&, const TraceSceneView&, const BvhView&, const MipView*,
-                                    const ConeSettings&, const DirectLightSettings&, bool) {
+                                    const IrradianceCacheView*, const ConeSettings&, const DirectLightSettings&, bool) {
+    noDevice();
+}
+
+std::vector<vec3> gatherIrradianceCuda(const std::vector<GatherPoint>&, const MipView&, const ConeSettings&, int) {
     noDevice();
 }
 

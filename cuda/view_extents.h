@@ -3,6 +3,7 @@
 // ranges, active voxels), so tests/cuda checks them against the owning containers on the host.
 #pragma once
 
+#include "cone/irradiance_cache.h"
 #include "cone/radiance_mips.h"
 #include "lighting/lighting_kernels.h"
 #include "trace/bvh.h"
@@ -38,6 +39,11 @@ inline size_t leafSlotCount(const BvhView& view) {
 inline size_t mipTexelCount(const MipLevelView& level) {
     if (!level.index) return 0;
     return static_cast<size_t>(level.index->activeVoxelCount()) * static_cast<size_t>(level.facesPerVoxel);
+}
+
+// Cell slots of an IrradianceCacheView (cellBegin has one more entry): its grid's active cells.
+inline size_t cacheCellSlotCount(const IrradianceCacheView& view) {
+    return view.cells ? static_cast<size_t>(view.cells->activeVoxelCount()) : 0;
 }
 
 // Entries of LightingView::emitterSamples: the end of the triangle whose samples end last.

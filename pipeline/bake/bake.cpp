@@ -119,12 +119,13 @@ BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& d
     // Voxel lighting and receiver shading run on the GPU when the settings pick it.
     const bool onGpu = cuda::resolveDevice(settings.device, std::cerr);
     const auto shade = [&](const SurfaceSampleSet& receivers, const TraceSceneView& sceneView, const BvhView& bvhView,
-                           const MipView& mipView, bool mayBeBuried, Progress& progress) {
+                           const MipView& mipView, const IrradianceCacheView* cache, bool mayBeBuried,
+                           Progress& progress) {
         if (onGpu)
-            return cuda::shadeReceiversCuda(receivers, sceneView, bvhView, &mipView, settings.cone, settings.direct,
-                                            mayBeBuried);
-        return shadeReceivers(receivers, sceneView, bvhView, &mipView, settings.cone, settings.direct, mayBeBuried,
-                              &progress);
+            return cuda::shadeReceiversCuda(receivers, sceneView, bvhView, &mipView, cache, settings.cone,
+                                            settings.direct, mayBeBuried);
+        return shadeReceivers(receivers, sceneView, bvhView, &mipView, cache, settings.cone, settings.direct,
+                              mayBeBuried, &progress);
     };
 
     BakeResult result;
@@ -139,11 +140,29 @@ BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& d
     });
     timed(result.stages, "bounces", [&] {
         Progress progress("bounces", uint64_t(settings.bounces) * result.voxels.size(), settings.quiet);
-        propagateBounces(result.voxels, bounceConeSettings(settings), settings.bounces, &progress);
+        propagateBounces(result.voxels, bounceConeSettings(settings), settings.bounces, settings.bounceGatherLevel,
+                         &progress);
         return 0;
     });
     result.mips = timed(result.stages, "mips", [&] { return buildRadianceMips(result.voxels); });
     const MipView mipView = result.mips.view();
+    // The final gather, once for every receiver of every output.
+    IrradianceCache cache;
+    if (settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images)) {
+        timed(result.stages, "gather", [&] {
+            cache = IrradianceCache(result.voxels, settings.gatherLevel);
+            Progress progress("gather", cache.points().size(), settings.quiet);
+            if (onGpu)
+                cache.setIrradiance(
+                    cuda::gatherIrradianceCuda(cache.points(), mipView, settings.cone, settings.gatherTurns));
+            else
+                cache.gather(mipView, settings.cone, settings.gatherTurns, &progress);
+            return 0;
+        });
+        result.gatherPoints = cache.points().size();
+    }
+    const IrradianceCacheView cacheView = cache.view(mipView);
+    const IrradianceCacheView* gathered = settings.gatherLevel >= 0 ? &cacheView : nullptr;
 
     const SceneTriangles triangles = gatherTriangles(scene);
     const Bvh bvh = timed(result.stages, "bvh", [&] { return Bvh::build(triangles); });
@@ -155,7 +174,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& d
         timed(result.stages, "lightmaps", [&] {
             for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, settings.lightmap, diagnostics)) {
                 Progress progress("lightmap " + atlas.name, atlas.receivers.elementCount(), settings.quiet);
-                const ReceiverLighting lit = shade(atlas.receivers, sceneView, bvhView, mipView, true, progress);
+                const ReceiverLighting lit = shade(atlas.receivers, sceneView, bvhView, mipView, gathered, true, progress);
                 progress.finish();
                 BakedLightmap baked{atlas.name, sumRgb(lit.direct, lit.indirect), lit.direct, lit.indirect, atlas.mask,
                                     atlas.coveredTexels};
@@ -178,7 +197,8 @@ BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& d
                 const CameraReceivers receivers = buildCameraReceivers(traceScene, bvh, model, settings.imageSubsamples,
                                                                        kEmissionSubsamples);
                 Progress progress("image", receivers.receivers.elementCount(), settings.quiet);
-                const ReceiverLighting lit = shade(receivers.receivers, sceneView, bvhView, mipView, false, progress);
+                const ReceiverLighting lit =
+                    shade(receivers.receivers, sceneView, bvhView, mipView, gathered, false, progress);
                 progress.finish();
                 result.images.push_back({camera.name,
                                          sumRgb(sumRgb(receivers.emission, lit.directRadiance), lit.indirectRadiance),

@@ -7,6 +7,7 @@
 
 #include "bake/bake_settings.h"
 #include "bake/receivers.h"
+#include "cone/irradiance_cache.h"
 #include "cone/radiance_mips.h"
 #include "core/diagnostics.h"
 #include "core/image.h"
@@ -46,6 +47,7 @@ struct BakeResult {
     std::vector<BakedLightmap> lightmaps;
     std::vector<BakedImage> images;
     std::vector<StageTime> stages;
+    size_t gatherPoints = 0;  // where the receivers' indirect light was gathered (0: at every sample)
 };
 
 // Checks that cost nothing (settings ranges, voxel count, memory) run first; throws

@@ -63,6 +63,7 @@ nlohmann::json reportJson(const BakeReport& report, const BakeSettings& settings
     json["voxel_size"] = report.voxelSize;
     json["voxels"] = report.voxels;
     json["mip_levels"] = report.mipLevels;
+    json["gather_points"] = report.gatherPoints;
     json["lightmap_texels"] = report.lightmapTexels;
     json["covered_texels"] = report.coveredTexels;
     json["pixels"] = report.pixels;
@@ -100,6 +101,7 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
     report.voxels = result.voxels.size();
     report.voxelSize = result.voxels.voxelSize;
     report.mipLevels = static_cast<size_t>(result.mips.levelCount());
+    report.gatherPoints = result.gatherPoints;
 
     const auto writeStart = std::chrono::steady_clock::now();
     StagedFiles files(staging, report);

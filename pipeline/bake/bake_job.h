@@ -32,6 +32,7 @@ struct BakeReport {
     size_t voxels = 0;
     double voxelSize = 0.0;
     size_t mipLevels = 0;
+    size_t gatherPoints = 0;
     size_t lightmapTexels = 0;
     size_t coveredTexels = 0;
     size_t pixels = 0;

@@ -1,5 +1,6 @@
 #include "bake/bake_settings.h"
 
+#include "cone/irradiance_cache.h"
 #include "core/error.h"
 
 #include <cmath>
@@ -65,6 +66,12 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.bounces = parseIntSetting("bounces", v, 0, 1024); }},
         {"bounce-cones", "cones per hemisphere of the voxel-to-voxel bounces: 6, 16 or 32 (default 6)",
          [](S& s, const std::string& v) { s.bounceCones = parseIntSetting("bounce-cones", v, 1, 64); }},
+        {"gather-level", "receivers interpolate irradiance gathered once per surface side of each block of 2^n voxels; -1: every sample gathers its own cones (default 3)",
+         [](S& s, const std::string& v) { s.gatherLevel = parseIntSetting("gather-level", v, -1, 16); }},
+        {"gather-turns", "cone sets traced per gather point of the final gather, each turned by 1/n turn (default 2)",
+         [](S& s, const std::string& v) { s.gatherTurns = parseIntSetting("gather-turns", v, 1, kMaxGatherTurns); }},
+        {"bounce-gather-level", "voxels interpolate bounce light gathered once per surface side of each block of 2^n voxels (default 3)",
+         [](S& s, const std::string& v) { s.bounceGatherLevel = parseIntSetting("bounce-gather-level", v, 0, 16); }},
         // Receivers
         {"lightmap-res", "lightmap atlas width and height in texels (default 256)",
          [](S& s, const std::string& v) {
@@ -108,6 +115,13 @@ void validateBakeSettings(const BakeSettings& s) {
     if (s.voxel.voxelSize < 0.0 || !std::isfinite(s.voxel.voxelSize))
         throw SettingsError("setting voxel-size = " + real(s.voxel.voxelSize) + " must be positive and finite");
     if (s.bounces < 0 || s.bounces > 1024) throw SettingsError("setting bounces = " + std::to_string(s.bounces) + " is outside 0..1024");
+    if (s.gatherLevel < -1 || s.gatherLevel > 16)
+        throw SettingsError("setting gather-level = " + std::to_string(s.gatherLevel) + " is outside -1..16");
+    if (s.gatherTurns < 1 || s.gatherTurns > kMaxGatherTurns)
+        throw SettingsError("setting gather-turns = " + std::to_string(s.gatherTurns) + " is outside 1.." +
+                            std::to_string(kMaxGatherTurns));
+    if (s.bounceGatherLevel < 0 || s.bounceGatherLevel > 16)
+        throw SettingsError("setting bounce-gather-level = " + std::to_string(s.bounceGatherLevel) + " is outside 0..16");
     if (s.direct.emitterStrata < 1 || s.direct.emitterStrata > 64)
         throw SettingsError("setting emitter-strata = " + std::to_string(s.direct.emitterStrata) + " is outside 1..64");
 }
@@ -118,7 +132,8 @@ std::string describeBakeSettings(const BakeSettings& s) {
         << ", fill-interior=" << s.voxel.fillInterior << ", normal-weights=" << toString(s.lighting.normalWeights)
         << ", hdda=" << (s.lighting.traversal == VisibilityTraversal::Hdda) << ", cones=" << s.cone.coneCount
         << ", aperture=" << s.cone.apertureDegrees << ", cone-offset=" << s.cone.startOffset
-        << ", step-factor=" << s.cone.stepFactor << ", bounces=" << s.bounces << ", bounce-cones=" << s.bounceCones << ", lightmap-res=" << s.lightmap.width
+        << ", step-factor=" << s.cone.stepFactor << ", bounces=" << s.bounces << ", bounce-cones=" << s.bounceCones << ", gather-level=" << s.gatherLevel << ", gather-turns=" << s.gatherTurns
+        << ", bounce-gather-level=" << s.bounceGatherLevel << ", lightmap-res=" << s.lightmap.width
         << ", lightmap-subsamples=" << s.lightmap.subsamplesPerAxis << ", emitter-strata=" << s.direct.emitterStrata
         << ", width=" << s.imageWidth << ", height=" << s.imageHeight;
     if (s.lighting.attenuation)

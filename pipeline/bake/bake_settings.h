@@ -36,6 +36,18 @@ struct BakeSettings {
     // box, 2 cores). `voxlight bench` regenerates the sweep.
     int bounces = 8;
     int bounceCones = 6;
+    // Where indirect irradiance is gathered (cone/irradiance_cache.h): at one point per
+    // surface side of each block of 2^level voxels per axis, interpolated at every texel,
+    // pixel sample and voxel. The bounces gather at bounceGatherLevel, the receivers at
+    // gatherLevel (−1: every receiver sample gathers its own cones, as a reference for the
+    // interpolation's error). Measured on the Cycles Cornell boxes (lightmap relRMSE, quad /
+    // point): per sample 6.64% / 8.87%, gather level 2 with bounces at 3: 6.64% / 8.43%.
+    int gatherLevel = 3;
+    int bounceGatherLevel = 3;
+    // Cone sets per gather point of the final gather, turned by 1/n turn from one another
+    // (irradiance_cache.h gatherAtPoint): 2 halve the gaps between the cones that a small
+    // bright region (a point light's hot spot) falls into.
+    int gatherTurns = 2;
     LightmapSettings lightmap;
     DirectLightSettings direct;
     int imageWidth = 256;

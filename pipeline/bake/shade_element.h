@@ -6,6 +6,7 @@
 #include "bake/direct_light.h"
 #include "cone/cone_set.h"
 #include "cone/cone_trace.h"
+#include "cone/irradiance_cache.h"
 #include "core/sampling.h"
 #include "trace/bvh_traverse.h"
 #include "trace/ray_offset.h"
@@ -54,22 +55,33 @@ struct ElementLighting {
     vec3 indirectRadiance{0.0f};
 };
 
+// Indirect irradiance at a receiver sample: interpolated from the gather points of `cache`
+// (irradiance_cache.h), or, without a cache or where no gather point applies, gathered by
+// cones at the sample itself, its set turned by coneTurn(seed).
+VL_HOSTDEV inline vec3 indirectIrradiance(const MipView& mips, const IrradianceCacheView* cache, const ConeSet& set,
+                                          const ConeSettings& cone, const SurfaceSample& r, uint64_t seed) {
+    vec3 E;
+    if (cache && interpolateIrradiance(*cache, r.position, r.normal, E)) return E;
+    return coneTraceIrradiance(mips, r.position, r.normal, set, cone, nullptr, coneTurn(seed));
+}
+
 // Samples [first, last) of `samples`; a sample's index seeds its direct term's strata and
 // turns its cone set (coneTurn), so the sub-samples of one pixel average differently turned
-// sets. `mips` null: no indirect light. `mayBeBuried`: lightmap texels, which can lie inside closed
+// sets. `mips` null: no indirect light. `cache`: where indirect light is interpolated from (null:
+// every sample gathers its own). `mayBeBuried`: lightmap texels, which can lie inside closed
 // geometry (isBuried: then no indirect light either); camera hits are seen, so never buried.
 VL_HOSTDEV inline ElementLighting shadeReceiverElement(const TraceSceneView& scene, const BvhView& bvh,
-                                                       const MipView* mips, const ConeSet& set,
-                                                       const ConeSettings& cone, const DirectLightSettings& direct,
-                                                       const SurfaceSample* samples, uint32_t first, uint32_t last,
-                                                       bool mayBeBuried) {
+                                                       const MipView* mips, const IrradianceCacheView* cache,
+                                                       const ConeSet& set, const ConeSettings& cone,
+                                                       const DirectLightSettings& direct, const SurfaceSample* samples,
+                                                       uint32_t first, uint32_t last, bool mayBeBuried) {
     ElementLighting out;
     for (uint32_t i = first; i < last; ++i) {
         const SurfaceSample& r = samples[i];
         const vec3 ed = directIrradiance(scene, bvh, r, direct, i) * kInvPi;
-        const vec3 ei =
-            mips && !(mayBeBuried && isBuried(scene, bvh, r)) ? coneTraceIrradiance(*mips, r.position, r.normal, set, cone, nullptr, coneTurn(i)) * kInvPi
-                 : vec3(0.0f);
+        const vec3 ei = mips && !(mayBeBuried && isBuried(scene, bvh, r))
+                            ? indirectIrradiance(*mips, cache, set, cone, r, i) * kInvPi
+                            : vec3(0.0f);
         out.direct += r.weight * ed;
         out.indirect += r.weight * ei;
         out.directRadiance += r.weight * r.albedo * ed;

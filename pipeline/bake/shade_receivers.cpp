@@ -9,8 +9,8 @@
 namespace vl {
 
 ReceiverLighting shadeReceivers(const SurfaceSampleSet& receivers, const TraceSceneView& scene, const BvhView& bvh,
-                                const MipView* mips, const ConeSettings& cone, const DirectLightSettings& direct,
-                                bool mayBeBuried, Progress* progress) {
+                                const MipView* mips, const IrradianceCacheView* cache, const ConeSettings& cone,
+                                const DirectLightSettings& direct, bool mayBeBuried, Progress* progress) {
     ReceiverLighting out;
     for (Image* image : {&out.direct, &out.indirect, &out.directRadiance, &out.indirectRadiance})
         *image = Image(receivers.width, receivers.height, 3);
@@ -18,7 +18,7 @@ ReceiverLighting shadeReceivers(const SurfaceSampleSet& receivers, const TraceSc
     const size_t elements = receivers.elementCount();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, elements, 64), [&](const tbb::blocked_range<size_t>& range) {
         for (size_t e = range.begin(); e != range.end(); ++e) {
-            const ElementLighting lit = shadeReceiverElement(scene, bvh, mips, set, cone, direct,
+            const ElementLighting lit = shadeReceiverElement(scene, bvh, mips, cache, set, cone, direct,
                                                              receivers.samples.data(), receivers.begin[e],
                                                              receivers.begin[e + 1], mayBeBuried);
             const int x = static_cast<int>(e % static_cast<size_t>(receivers.width));

@@ -6,6 +6,7 @@
 
 #include "bake/direct_light.h"
 #include "cone/cone_settings.h"
+#include "cone/irradiance_cache.h"
 #include "cone/radiance_mips.h"
 #include "core/image.h"
 #include "trace/bvh.h"
@@ -22,10 +23,12 @@ struct ReceiverLighting {
     Image indirectRadiance;  // RGB Σ w·albedo·E_indirect/π
 };
 
-// `mips` may be null (no indirect light: direct only). `mayBeBuried`: the receivers are
-// lightmap texels, which can lie inside closed geometry (shade_element.h isBuried).
+// `mips` may be null (no indirect light: direct only). `cache`, when given, holds the
+// irradiance that receivers interpolate (shade_element.h indirectIrradiance); without it
+// every sample gathers its own cones. `mayBeBuried`: the receivers are lightmap texels,
+// which can lie inside closed geometry (shade_element.h isBuried).
 ReceiverLighting shadeReceivers(const SurfaceSampleSet& receivers, const TraceSceneView& scene, const BvhView& bvh,
-                                const MipView* mips, const ConeSettings& cone, const DirectLightSettings& direct,
-                                bool mayBeBuried, Progress* progress = nullptr);
+                                const MipView* mips, const IrradianceCacheView* cache, const ConeSettings& cone,
+                                const DirectLightSettings& direct, bool mayBeBuried, Progress* progress = nullptr);
 
 }  // namespace vl

@@ -1,12 +1,15 @@
 #include "cone/bounces.h"
 
+#include "cone/irradiance_cache.h"
 #include "core/error.h"
 #include "core/progress.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <string>
+#include <utility>
 
 namespace vl {
 
@@ -44,33 +47,105 @@ std::vector<vec3> isotropic(const VoxelScene& voxels, const std::vector<FaceRadi
     return radiance;
 }
 
+// Which gather points each voxel side reads and how much (visitCachePoints), computed once:
+// the points and the voxels do not move between bounces. Sides no point applies to gather
+// at the voxel itself (`selfGathered`).
+struct SideWeights {
+    std::vector<uint32_t> begin;  // per voxel side slot (voxel·6 + side): [begin[s], begin[s + 1])
+    std::vector<uint32_t> point;
+    std::vector<float> weight;    // normalised: Σ = 1 per side
+    std::vector<uint32_t> selfGathered;  // side slots with no point
+};
+
+SideWeights sideWeights(const VoxelScene& voxels, const IrradianceCacheView& cache) {
+    struct VoxelEntries {
+        uint32_t perSide[6] = {};
+        std::vector<std::pair<uint32_t, float>> entries;  // side by side
+    };
+    std::vector<VoxelEntries> perVoxel(voxels.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, voxels.size()), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t i = range.begin(); i != range.end(); ++i) {
+            const VoxelSides sides = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
+            VoxelEntries& v = perVoxel[i];
+            for (int s = 0; s < sides.count; ++s) {
+                const size_t first = v.entries.size();
+                const float total = visitCachePoints(cache, voxels.centre(i), sides.normal[s],
+                                                     [&](uint32_t q, float w) { v.entries.emplace_back(q, w); });
+                for (size_t k = first; k < v.entries.size(); ++k) v.entries[k].second /= total;
+                v.perSide[s] = static_cast<uint32_t>(v.entries.size() - first);
+            }
+        }
+    });
+    SideWeights out;
+    out.begin.assign(voxels.size() * 6 + 1, 0);
+    for (size_t i = 0; i < voxels.size(); ++i) {
+        for (const auto& [point, weight] : perVoxel[i].entries) {
+            out.point.push_back(point);
+            out.weight.push_back(weight);
+        }
+        const int sideCount = voxelSides(voxels.normal[i], voxels.axisWeights[i].data()).count;
+        for (int s = 0; s < 6; ++s) {
+            const size_t slot = i * 6 + size_t(s);
+            out.begin[slot + 1] = out.begin[slot] + perVoxel[i].perSide[s];
+            if (s < sideCount && perVoxel[i].perSide[s] == 0) out.selfGathered.push_back(static_cast<uint32_t>(slot));
+        }
+    }
+    return out;
+}
+
 }  // namespace
 
-void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces, Progress* progress) {
+void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces, int gatherLevel,
+                      Progress* progress) {
     validateConeSettings(settings);
     if (bounces < 0 || bounces > kMaxBounces)
         throw SettingsError("bounces = " + std::to_string(bounces) + " is outside [0, " +
                             std::to_string(kMaxBounces) + "]");
     checkChannels(voxels);
+    IrradianceCache cache(voxels, gatherLevel);
     if (bounces == 0 || voxels.size() == 0) return;
 
     const ConeSet& set = coneSet(settings.coneCount);
     const std::vector<FaceRadiance> lit = litFaces(voxels);
     std::vector<FaceRadiance> current = lit;
     std::vector<FaceRadiance> next(voxels.size());
+    RadianceMips mips = buildRadianceMips(voxels, isotropic(voxels, current), current);
+    const SideWeights weights = sideWeights(voxels, cache.view(mips.view()));
+    std::vector<vec3> selfIrradiance(weights.selfGathered.size());
     for (int b = 0; b < bounces; ++b) {
-        const RadianceMips mips = buildRadianceMips(voxels, isotropic(voxels, current), current);
+        if (b > 0) mips.relight(voxels, isotropic(voxels, current), current);
         const MipView view = mips.view();
+        cache.gather(view, settings);
+        tbb::parallel_for(size_t(0), weights.selfGathered.size(), [&](size_t k) {
+            const size_t i = weights.selfGathered[k] / 6;
+            const int side = static_cast<int>(weights.selfGathered[k] % 6);
+            const VoxelSides sides = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
+            selfIrradiance[k] = coneTraceIrradiance(view, voxels.centre(i), sides.normal[side], set, settings, nullptr,
+                                                    coneTurn(i * 6 + size_t(side)));
+        });
+        const IrradianceCacheView points = cache.view(view);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, voxels.size()), [&](const tbb::blocked_range<size_t>& range) {
             for (size_t i = range.begin(); i != range.end(); ++i) {
+                const VoxelSides sides = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
                 vec3 e[6];
-                faceIrradiance(view, voxels.centre(i), voxels.normal[i], voxels.axisWeights[i].data(), set, settings, e,
-                               coneTurn(i));
+                for (int s = 0; s < sides.count; ++s) {
+                    const size_t slot = i * 6 + size_t(s);
+                    e[s] = vec3(0.0f);
+                    if (weights.begin[slot] == weights.begin[slot + 1]) {
+                        const auto found = std::lower_bound(weights.selfGathered.begin(), weights.selfGathered.end(),
+                                                            static_cast<uint32_t>(slot));
+                        e[s] = selfIrradiance[size_t(found - weights.selfGathered.begin())];
+                        continue;
+                    }
+                    for (uint32_t k = weights.begin[slot]; k < weights.begin[slot + 1]; ++k)
+                        e[s] += weights.weight[k] * points.irradiance[weights.point[k]];
+                }
                 const vec3 reflectance = voxels.albedo[i] * kInvPi;
-                for (size_t f = 0; f < 6; ++f) next[i][f] = lit[i][f] + reflectance * e[f];
+                for (size_t f = 0; f < 6; ++f)
+                    next[i][f] = lit[i][f] + (sides.sideOfFace[f] >= 0 ? reflectance * e[sides.sideOfFace[f]] : vec3(0.0f));
             }
-            if (progress) progress->advance(range.size());
         });
+        if (progress) progress->advance(voxels.size());
         current.swap(next);
     }
     voxels.radiance = isotropic(voxels, current);

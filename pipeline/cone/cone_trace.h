@@ -35,6 +35,7 @@ namespace vl {
 
 // Cones sample one level finer than their diameter (see above).
 constexpr float kConeLevelOffset = 1.0f;
+constexpr float kConeLevelScale = 0.5f;  // 2^−kConeLevelOffset: level = log2(D·scale / h)
 
 struct ConeResult {
     vec3 radiance = vec3(0.0f);  // Σ (1 − A)·c': what the cone sees, α-composited
@@ -77,44 +78,64 @@ VL_HOSTDEV inline void viewFaces(const vec3& u, int (&faces)[3], float (&weights
     for (int a = 0; a < 3; ++a) weights[a] = sum > 0.0f ? weights[a] / sum : 1.0f / 3.0f;
 }
 
-VL_HOSTDEV inline MipSample sampleMipLevel(const MipLevelView& level, const vec3& x, const vec3& dir,
-                                           const vec3* viewpoint = nullptr) {
+VL_HOSTDEV inline MipSample sampleMipLevel(const MipLevelView& level, MipLeafCache& leaves, const vec3& x,
+                                           const vec3& dir, const vec3* viewpoint = nullptr) {
     constexpr float kIndexLimit = 1.0e9f;  // keeps the int conversion defined far outside
     MipSample sum;
     if (!(glm::abs(x.x) < kIndexLimit && glm::abs(x.y) < kIndexLimit && glm::abs(x.z) < kIndexLimit)) return sum;
-    int travelFaces[3];
-    float travelWeights[3];
-    viewFaces(dir, travelFaces, travelWeights);
 
     const vec3 base = glm::floor(x);
     const vec3 f = x - base;
     const ivec3 i0(base);
-    auto accessor = level.index->getAccessor();
-    for (int dz = 0; dz < 2; ++dz)
-        for (int dy = 0; dy < 2; ++dy)
-            for (int dx = 0; dx < 2; ++dx) {
-                const float w = (dx ? f.x : 1.0f - f.x) * (dy ? f.y : 1.0f - f.y) * (dz ? f.z : 1.0f - f.z);
-                if (w == 0.0f) continue;
-                const ivec3 corner(i0.x + dx, i0.y + dy, i0.z + dz);
-                const int32_t index = accessor.getValue(nanovdb::Coord(corner.x, corner.y, corner.z));
-                if (index < 0) continue;
-                int faces[3] = {travelFaces[0], travelFaces[1], travelFaces[2]};
-                float faceWeights[3] = {travelWeights[0], travelWeights[1], travelWeights[2]};
-                if (viewpoint) {
-                    const vec3 u = vec3(corner) - *viewpoint;
-                    if (glm::dot(u, u) > 0.0f) viewFaces(u, faces, faceWeights);
-                }
-                const MipTexel* texels = level.texels + size_t(index) * size_t(level.facesPerVoxel);
-                for (int a = 0; a < 3; ++a) {
-                    const MipTexel& t = texels[faces[a]];
-                    const float tw = w * faceWeights[a];
-                    sum.radiance += tw * t.radiance;
-                    sum.alpha += tw * t.alpha;
-                    sum.density += tw * t.density;
-                    sum.coverage += tw * t.coverage;
-                }
-            }
+    // The eight corners' texel indices; where they share a leaf (7 samples in 8 with
+    // 8³ leaves), one leaf lookup serves all of them.
+    using Leaf = MipLeafCache::Leaf;
+    int32_t indices[8];
+    constexpr int kLast = int(Leaf::MASK);
+    if ((i0.x & kLast) != kLast && (i0.y & kLast) != kLast && (i0.z & kLast) != kLast) {
+        const Leaf* leaf = leaves.find(*level.index, nanovdb::Coord(i0.x, i0.y, i0.z));
+        if (!leaf) return sum;
+        const uint32_t first = Leaf::CoordToOffset(nanovdb::Coord(i0.x, i0.y, i0.z));
+        for (int k = 0; k < 8; ++k)
+            indices[k] = leaf->getValue(first + uint32_t((k & 1) << (2 * Leaf::LOG2DIM)) +
+                                        uint32_t(((k >> 1) & 1) << Leaf::LOG2DIM) + uint32_t(k >> 2));
+    } else {
+        for (int k = 0; k < 8; ++k)
+            indices[k] = leaves.value(*level.index, nanovdb::Coord(i0.x + (k & 1), i0.y + ((k >> 1) & 1), i0.z + (k >> 2)));
+    }
+
+    int travelFaces[3];
+    float travelWeights[3];
+    viewFaces(dir, travelFaces, travelWeights);
+    const vec3 fromViewpoint = viewpoint ? base - *viewpoint : vec3(0.0f);
+    for (int k = 0; k < 8; ++k) {
+        if (indices[k] < 0) continue;
+        const int dx = k & 1, dy = (k >> 1) & 1, dz = k >> 2;
+        const float w = (dx ? f.x : 1.0f - f.x) * (dy ? f.y : 1.0f - f.y) * (dz ? f.z : 1.0f - f.z);
+        if (w == 0.0f) continue;
+        int faces[3] = {travelFaces[0], travelFaces[1], travelFaces[2]};
+        float faceWeights[3] = {travelWeights[0], travelWeights[1], travelWeights[2]};
+        if (viewpoint) {
+            const vec3 u = fromViewpoint + vec3(float(dx), float(dy), float(dz));
+            if (glm::dot(u, u) > 0.0f) viewFaces(u, faces, faceWeights);
+        }
+        const MipTexel* texels = level.texels + size_t(indices[k]) * size_t(level.facesPerVoxel);
+        for (int a = 0; a < 3; ++a) {
+            const MipTexel& t = texels[faces[a]];
+            const float tw = w * faceWeights[a];
+            sum.radiance += tw * t.radiance;
+            sum.alpha += tw * t.alpha;
+            sum.density += tw * t.density;
+            sum.coverage += tw * t.coverage;
+        }
+    }
     return sum;
+}
+
+VL_HOSTDEV inline MipSample sampleMipLevel(const MipLevelView& level, const vec3& x, const vec3& dir,
+                                           const vec3* viewpoint = nullptr) {
+    MipLeafCache leaves;
+    return sampleMipLevel(level, leaves, x, dir, viewpoint);
 }
 
 // What one segment of `stepLength` (metres) around world point p contributes at fractional
@@ -125,8 +146,9 @@ VL_HOSTDEV inline MipSample sampleMipLevel(const MipLevelView& level, const vec3
 // centre, 1 − exp(−σ·s/v) = 1 − (1 − α)^(s/v): the step-length correction.
 // Correcting each level before blending keeps a uniform medium exact at any λ.
 // `apex`, when given, is the viewer every voxel is seen from (sampleMipLevel).
+// `leaves`, when given, holds one MipLeafCache per level that persists along a cone.
 VL_HOSTDEV inline vec4 coneSegment(const MipView& mips, const vec3& p, const vec3& dir, float level,
-                                   float stepLength, const vec3* apex = nullptr) {
+                                   float stepLength, const vec3* apex = nullptr, MipLeafCache* leaves = nullptr) {
     if (mips.levelCount <= 0) return vec4(0.0f);
     level = glm::clamp(level, 0.0f, float(mips.levelCount - 1));
     const int lower = static_cast<int>(level);
@@ -135,11 +157,13 @@ VL_HOSTDEV inline vec4 coneSegment(const MipView& mips, const vec3& p, const vec
     for (int l = lower; l <= lower + 1 && l < mips.levelCount; ++l) {
         const float weight = l == lower ? 1.0f - blend : blend;
         if (weight <= 0.0f) continue;
-        const vec3 viewpoint = apex ? mipIndexPosition(*apex, mips.voxelSize, l) : vec3(0.0f);
-        const MipSample s =
-            sampleMipLevel(mips.levels[l], mipIndexPosition(p, mips.voxelSize, l), dir, apex ? &viewpoint : nullptr);
+        const MipLevelView& view = mips.levels[l];
+        const vec3 viewpoint = apex ? *apex * view.inverseVoxelSize - vec3(view.centreOffset) : vec3(0.0f);
+        MipLeafCache local;
+        const MipSample s = sampleMipLevel(view, leaves ? leaves[l] : local, p * view.inverseVoxelSize - vec3(view.centreOffset),
+                                           dir, apex ? &viewpoint : nullptr);
         if (!(s.alpha > 0.0f)) continue;
-        const float opacity = -expm1f(-s.density * stepLength / ldexpf(mips.voxelSize, l));
+        const float opacity = -expm1f(-s.density * stepLength * view.inverseVoxelSize);
         result += weight * vec4(s.colour() * opacity, opacity);
     }
     return result;
@@ -189,32 +213,35 @@ VL_HOSTDEV inline ConeResult traceCone(const MipView& mips, const vec3& apex, co
 
     const float h = mips.voxelSize;
     const float maxLevel = float(mips.levelCount - 1);
-    const float coarsestVoxel = ldexpf(h, mips.levelCount - 1);
+    const float coarsestVoxel = mips.levels[mips.levelCount - 1].voxelSize;
     stepFactor = glm::max(stepFactor, 1.0e-3f);  // guarantees progress whatever the caller passes
     const float tEnd = maxDistance > 0.0f ? maxDistance : kInfinity;
+    MipLeafCache leaves[MipView::kMaxLevels];
     // Samples farther than a coarsest voxel and a half from the bounds read only zeros.
     float t = glm::max(0.0f, tIn - 1.5f * coarsestVoxel);
     while (t < tEnd && result.occlusion < kOpaque) {
         // A level-l sample reads voxel centres up to one level-l voxel away, and a level-l
         // voxel that holds the receiver's surface has its centre up to half of one above it:
         // the coarsest level a sample at height z may read is log2(z / 1.5h). A fractional
-        // level also reads the next coarser one, so the level itself stays one below that.
-        // The step follows the footprint actually sampled, so a clamped (finer) sample never
+        // level also reads the next coarser one, so the level itself stays one below that:
+        // λ_plane = log2(z / 3h). The step follows the footprint actually sampled,
+        // h·2^(max(λ_plane, 0) + 1) = max(2h, z / 1.5), so a clamped (finer) sample never
         // steps over a wall one of its voxels thick. Heights only grow along the cone, so the
         // bound taken at the step's start holds over the whole step.
-        const float planeLevel =
-            glm::log2(glm::max(origin.apexHeight + t * origin.cosToNormal, h) / (1.5f * h)) - 1.0f;
-        const float planeDiameter = h * glm::exp2(glm::max(planeLevel, 0.0f) + kConeLevelOffset);
+        const float height = glm::max(origin.apexHeight + t * origin.cosToNormal, h);
+        const float planeDiameter = glm::max(2.0f * h, height * (1.0f / 1.5f));
         const float step =
             glm::min(stepFactor * glm::max(h, glm::min(2.0f * t * tanHalfAngle, planeDiameter)), tEnd - t);
         const float tMid = t + 0.5f * step;
         const float diameter = glm::max(h, 2.0f * tMid * tanHalfAngle);
-        const float level =
-            glm::clamp(glm::min(glm::log2(diameter / h) - kConeLevelOffset, planeLevel), 0.0f, maxLevel);
+        // min(log2(D/h) − kConeLevelOffset, λ_plane) with one logarithm.
+        const float level = glm::clamp(
+            glm::log2(glm::min(diameter * kConeLevelScale, height * (1.0f / 3.0f)) / h),
+            0.0f, maxLevel);
         // Past the bounds, coarse samples still read the blurred border voxels: their centres
         // lie up to half a voxel outside and trilinear weights reach one voxel further.
-        if (tMid > tOut + 1.5f * ldexpf(h, static_cast<int>(glm::ceil(level)))) break;
-        const vec4 segment = coneSegment(mips, apex + tMid * dir, dir, level, step, &apex);
+        if (tMid > tOut + 1.5f * mips.levels[static_cast<int>(glm::ceil(level))].voxelSize) break;
+        const vec4 segment = coneSegment(mips, apex + tMid * dir, dir, level, step, &apex, leaves);
         const float remaining = 1.0f - result.occlusion;
         result.radiance += remaining * vec3(segment);
         result.occlusion = glm::min(1.0f, result.occlusion + remaining * segment.w);

@@ -72,20 +72,18 @@ MipTexel makeTexel(const vec3& premultiplied, float alpha, float coverage) {
 // The face a cone travelling along `travel` sees: the one facing back at it.
 constexpr int facingFace(int travel) { return travel ^ 1; }
 
-MipLevel levelZero(const VoxelScene& voxels, const std::vector<vec3>& radiance, const std::vector<FaceRadiance>* faces) {
-    MipLevel level;
-    level.voxelSize = voxels.voxelSize;
-    level.coords = voxels.coords;
-    level.facesPerVoxel = kFaceCount;
+// Level 0's values and texels from the voxels (level.coords are the voxels').
+void lightLevelZero(MipLevel& level, const VoxelScene& voxels, const std::vector<vec3>& radiance,
+                    const std::vector<FaceRadiance>* faces) {
     level.values.resize(voxels.size());
     level.texels.resize(voxels.size() * kFaceCount);
-    for (size_t i = 0; i < voxels.size(); ++i) {
+    tbb::parallel_for(size_t(0), voxels.size(), [&](size_t i) {
         const float alpha = voxels.solid[i] ? 1.0f : voxels.opacity[i];
         level.values[i] = vec4(alpha * radiance[i], alpha);
         MipTexel* texels = &level.texels[i * kFaceCount];
         if (!faces) {
             for (int travel = 0; travel < kFaceCount; ++travel) texels[travel] = makeTexel(alpha * radiance[i], alpha, alpha);
-            continue;
+            return;
         }
         const AxisWeights& w = voxels.axisWeights[i];
         float largest = 0.0f;
@@ -96,12 +94,20 @@ MipLevel levelZero(const VoxelScene& voxels, const std::vector<vec3>& radiance, 
             const float share = largest > 0.0f && weight > 0.0f && std::isfinite(weight) ? weight / largest : 0.0f;
             texels[travel] = makeTexel(share * alpha * (*faces)[i][size_t(face)], alpha, share * alpha);
         }
-    }
+    });
+}
+
+MipLevel levelZero(const VoxelScene& voxels, const std::vector<vec3>& radiance, const std::vector<FaceRadiance>* faces) {
+    MipLevel level;
+    level.voxelSize = voxels.voxelSize;
+    level.coords = voxels.coords;
+    level.facesPerVoxel = kFaceCount;
+    lightLevelZero(level, voxels, radiance, faces);
     return level;
 }
 
 // One parent from its children (slot = child − 2·parent, x + 2y + 4z; −1 where absent).
-void makeParent(const MipLevel& children, const int (&slots)[8], vec4& value, MipTexel* texels) {
+void makeParent(const MipLevel& children, const std::array<int32_t, 8>& slots, vec4& value, MipTexel* texels) {
     value = vec4(0.0f);
     for (int slot : slots)
         if (slot >= 0) value += children.values[size_t(slot)];
@@ -135,6 +141,17 @@ void makeParent(const MipLevel& children, const int (&slots)[8], vec4& value, Mi
     }
 }
 
+// A parent level's values and texels from its children (parents.children set).
+void lightParents(MipLevel& parents, const MipLevel& children) {
+    const size_t parentCount = parents.coords.size();
+    parents.values.resize(parentCount);
+    parents.texels.resize(parentCount * kFaceCount);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, parentCount), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t p = range.begin(); p != range.end(); ++p)
+            makeParent(children, parents.children[p], parents.values[p], &parents.texels[p * kFaceCount]);
+    });
+}
+
 // Children are grouped by a sort of unique keys and each parent reads only its own
 // children, so the result is the same bytes at any thread count.
 MipLevel parentLevel(const MipLevel& children, double baseVoxelSize, int level) {
@@ -156,21 +173,21 @@ MipLevel parentLevel(const MipLevel& children, double baseVoxelSize, int level) 
     parents.centreOffset = vec3(static_cast<float>((std::ldexp(1.0, level) - 1.0) * 0.5 * baseVoxelSize));
     parents.facesPerVoxel = kFaceCount;
     parents.coords.resize(parentCount);
-    parents.values.resize(parentCount);
-    parents.texels.resize(parentCount * kFaceCount);
+    parents.children.resize(parentCount);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, parentCount), [&](const tbb::blocked_range<size_t>& range) {
         for (size_t p = range.begin(); p != range.end(); ++p) {
             const ivec3 first = children.coords[keyed[groupBegin[p]].second];
             const ivec3 parent(floorHalf(first.x), floorHalf(first.y), floorHalf(first.z));
-            int slots[8] = {-1, -1, -1, -1, -1, -1, -1, -1};
+            std::array<int32_t, 8> slots = {-1, -1, -1, -1, -1, -1, -1, -1};
             for (size_t j = groupBegin[p]; j < groupBegin[p + 1]; ++j) {
                 const ivec3 d = children.coords[keyed[j].second] - 2 * parent;
-                slots[d.x + 2 * d.y + 4 * d.z] = static_cast<int>(keyed[j].second);
+                slots[size_t(d.x + 2 * d.y + 4 * d.z)] = static_cast<int32_t>(keyed[j].second);
             }
             parents.coords[p] = parent;
-            makeParent(children, slots, parents.values[p], &parents.texels[p * kFaceCount]);
+            parents.children[p] = slots;
         }
     });
+    lightParents(parents, children);
     return parents;
 }
 
@@ -211,8 +228,22 @@ MipView RadianceMips::view() const {
         view.levels[k].index = indexGrid(k);
         view.levels[k].texels = levels_[size_t(k)].texels.data();
         view.levels[k].facesPerVoxel = levels_[size_t(k)].facesPerVoxel;
+        view.levels[k].voxelSize = static_cast<float>(levels_[size_t(k)].voxelSize);
+        view.levels[k].inverseVoxelSize = static_cast<float>(1.0 / levels_[size_t(k)].voxelSize);
+        view.levels[k].centreOffset = static_cast<float>(0.5 - std::ldexp(0.5, -k));
     }
     return view;
+}
+
+void RadianceMips::relight(const VoxelScene& voxels, const std::vector<vec3>& radiance,
+                           const std::vector<FaceRadiance>& faceRadiance) {
+    checkInputs(voxels, radiance, &faceRadiance);
+    if (levels_.empty() || levels_[0].coords.size() != voxels.size())
+        throw Error("RadianceMips::relight(" + voxels.sourceScene + "): the mips were built for " +
+                    std::to_string(levels_.empty() ? 0 : levels_[0].coords.size()) + " voxels, not " +
+                    std::to_string(voxels.size()));
+    lightLevelZero(levels_[0], voxels, radiance, &faceRadiance);
+    for (size_t k = 1; k < levels_.size(); ++k) lightParents(levels_[k], levels_[k - 1]);
 }
 
 size_t RadianceMips::memoryBytes() const {
@@ -220,7 +251,7 @@ size_t RadianceMips::memoryBytes() const {
     for (const auto& handle : grids_) bytes += handle.size();
     for (const MipLevel& level : levels_)
         bytes += level.coords.size() * sizeof(ivec3) + level.values.size() * sizeof(vec4) +
-                 level.texels.size() * sizeof(MipTexel);
+                 level.texels.size() * sizeof(MipTexel) + level.children.size() * sizeof(level.children[0]);
     return bytes;
 }
 

@@ -51,6 +51,7 @@
 #include <nanovdb/util/GridHandle.h>
 #include <nanovdb/util/HostBuffer.h>
 
+#include <array>
 #include <vector>
 
 namespace vl {
@@ -78,6 +79,33 @@ struct MipLevelView {
     const MipIndexGrid* index = nullptr;
     const MipTexel* texels = nullptr;  // texel of voxel i, face f: texels[i·facesPerVoxel + f]
     int facesPerVoxel = 6;             // one texel per direction of travel at every level
+    // mipIndexPosition(p) = p·inverseVoxelSize − centreOffset at this level, precomputed
+    // for the kernels (what a cone step would otherwise recompute with ldexp).
+    float voxelSize = 0.0f;         // 2^k·h
+    float inverseVoxelSize = 0.0f;  // 1 / (2^k·h)
+    float centreOffset = 0.0f;      // (1 − 2^−k)/2
+};
+
+// The leaf of one mip level's index grid that the last lookup landed in: consecutive cone
+// samples and the eight corners of a trilinear sample mostly share a leaf. Also remembers
+// where there is no leaf (the index grid has no active tiles, so every voxel there is −1).
+struct MipLeafCache {
+    using Leaf = nanovdb::NanoLeaf<int32_t>;
+    const Leaf* leaf = nullptr;
+    nanovdb::Coord origin = nanovdb::Coord::max();
+
+    VL_HOSTDEV const Leaf* find(const MipIndexGrid& grid, const nanovdb::Coord& ijk) {
+        const nanovdb::Coord o(ijk[0] & ~int32_t(Leaf::MASK), ijk[1] & ~int32_t(Leaf::MASK), ijk[2] & ~int32_t(Leaf::MASK));
+        if (!(o == origin)) {
+            origin = o;
+            leaf = grid.tree().root().probeLeaf(ijk);
+        }
+        return leaf;
+    }
+    VL_HOSTDEV int32_t value(const MipIndexGrid& grid, const nanovdb::Coord& ijk) {
+        const Leaf* l = find(grid, ijk);
+        return l ? l->getValue(Leaf::CoordToOffset(ijk)) : -1;
+    }
 };
 
 // What a kernel needs: per-level grids and texel arrays (host or device memory, as the
@@ -112,6 +140,8 @@ struct MipLevel {
     std::vector<vec4> values;        // isotropic (α·radiance, α), parallel to coords
     std::vector<MipTexel> texels;    // facesPerVoxel per voxel
     int facesPerVoxel = 6;
+    // Level k > 0: per voxel its 8 children at level k − 1 (slot x + 2y + 4z, −1 absent).
+    std::vector<std::array<int32_t, 8>> children;
 };
 
 class RadianceMips {
@@ -122,6 +152,11 @@ public:
     const MipIndexGrid* indexGrid(int k) const;
     MipView view() const;
     size_t memoryBytes() const;  // index grids and texel arrays of all levels
+    // New radiance on the same voxels (what the bounces do once per bounce): the texels and
+    // values are recomputed, the topology and index grids kept. The same result as
+    // buildRadianceMips(voxels, radiance, faceRadiance) with the same checks.
+    void relight(const VoxelScene& voxels, const std::vector<vec3>& radiance,
+                 const std::vector<FaceRadiance>& faceRadiance);
 
 private:
     friend RadianceMips buildMips(const VoxelScene&, const std::vector<vec3>&, const std::vector<FaceRadiance>*);

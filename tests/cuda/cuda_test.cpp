@@ -175,8 +175,9 @@ TEST_CASE("Without a usable GPU --device cuda and every launcher are clear error
     CHECK_THROWS_WITH(cuda::renderCameraCuda(c.trace, c.bvh, cornellCamera(4), settings), expected);
     CHECK_THROWS_WITH(cuda::traceIrradianceCuda(c.trace, c.bvh, c.atlases.front().receivers, settings), expected);
     CHECK_THROWS_WITH(cuda::shadeReceiversCuda(c.atlases.front().receivers, c.trace.view(), c.bvh.view(), nullptr,
-                                               ConeSettings{}, DirectLightSettings{}, true),
+                                               nullptr, ConeSettings{}, DirectLightSettings{}, true),
                       expected);
+    CHECK_THROWS_WITH(cuda::gatherIrradianceCuda({GatherPoint{}}, MipView{}, ConeSettings{}, 1), expected);
     VoxelScene voxels = c.voxels;
     CHECK_THROWS_WITH(cuda::lightVoxelsCuda(c.scene, voxels, LightingSettings{}), expected);
     CHECK(voxels.radiance == c.voxels.radiance);  // nothing was touched
@@ -243,30 +244,39 @@ TEST_CASE("The GPU receiver kernel run on the host equals shadeReceivers bit for
     const MipView mipView = mips.view();
     const ConeSettings cone;
     const DirectLightSettings direct;
-    const ReceiverLighting cpu = shadeReceivers(receivers, c.trace.view(), c.bvh.view(), &mipView, cone, direct, true);
-    ReceiverLighting host;
-    for (Image* image : {&host.direct, &host.indirect, &host.directRadiance, &host.indirectRadiance})
-        *image = Image(receivers.width, receivers.height, 3);
+    IrradianceCache cache(c.voxels, 2);
+    cache.gather(mipView, cone);
+    const IrradianceCacheView cacheView = cache.view(mipView);
     const ConeSet& set = coneSet(cone.coneCount);
-    for (size_t e = 0; e < receivers.elementCount(); ++e) {
-        const ElementLighting l =
-            shadeReceiverElement(c.trace.view(), c.bvh.view(), &mipView, set, cone, direct,
-                                       receivers.samples.data(), receivers.begin[e], receivers.begin[e + 1], true);
-        const int x = int(e % receivers.width), y = int(e / receivers.width);
-        host.direct.setRgb(x, y, l.direct);
-        host.indirect.setRgb(x, y, l.indirect);
-        host.directRadiance.setRgb(x, y, l.directRadiance);
-        host.indirectRadiance.setRgb(x, y, l.indirectRadiance);
+    // Both ways to the indirect light: interpolated from the gather points, and gathered by
+    // every sample's own cones (no cache).
+    for (const IrradianceCacheView* gathered : {&cacheView, static_cast<const IrradianceCacheView*>(nullptr)}) {
+        INFO((gathered ? "interpolated" : "own cones"));
+        const ReceiverLighting cpu =
+            shadeReceivers(receivers, c.trace.view(), c.bvh.view(), &mipView, gathered, cone, direct, true);
+        ReceiverLighting host;
+        for (Image* image : {&host.direct, &host.indirect, &host.directRadiance, &host.indirectRadiance})
+            *image = Image(receivers.width, receivers.height, 3);
+        for (size_t e = 0; e < receivers.elementCount(); ++e) {
+            const ElementLighting l = shadeReceiverElement(c.trace.view(), c.bvh.view(), &mipView, gathered, set, cone,
+                                                           direct, receivers.samples.data(), receivers.begin[e],
+                                                           receivers.begin[e + 1], true);
+            const int x = int(e % receivers.width), y = int(e / receivers.width);
+            host.direct.setRgb(x, y, l.direct);
+            host.indirect.setRgb(x, y, l.indirect);
+            host.directRadiance.setRgb(x, y, l.directRadiance);
+            host.indirectRadiance.setRgb(x, y, l.indirectRadiance);
+        }
+        double direct0 = 0.0, indirect0 = 0.0;
+        for (float v : cpu.direct.pixels) direct0 += v;
+        for (float v : cpu.indirect.pixels) indirect0 += v;
+        REQUIRE(direct0 > 0.0);
+        REQUIRE(indirect0 > 0.0);
+        CHECK(sameBits(host.direct, cpu.direct));
+        CHECK(sameBits(host.indirect, cpu.indirect));
+        CHECK(sameBits(host.directRadiance, cpu.directRadiance));
+        CHECK(sameBits(host.indirectRadiance, cpu.indirectRadiance));
     }
-    double direct0 = 0.0, indirect0 = 0.0;
-    for (float v : cpu.direct.pixels) direct0 += v;
-    for (float v : cpu.indirect.pixels) indirect0 += v;
-    REQUIRE(direct0 > 0.0);
-    REQUIRE(indirect0 > 0.0);
-    CHECK(sameBits(host.direct, cpu.direct));
-    CHECK(sameBits(host.indirect, cpu.indirect));
-    CHECK(sameBits(host.directRadiance, cpu.directRadiance));
-    CHECK(sameBits(host.indirectRadiance, cpu.indirectRadiance));
 }
 
 TEST_CASE("lightVoxels with a kernel runner gives the TBB loop's bits and stats", "[cuda]") {
@@ -319,11 +329,30 @@ TEST_CASE("GPU receiver shading agrees with the CPU on the Cornell lightmap", "[
     const RadianceMips mips = buildRadianceMips(c.voxels);
     const MipView mipView = mips.view();
     const ReceiverLighting cpu =
-        shadeReceivers(receivers, c.trace.view(), c.bvh.view(), &mipView, ConeSettings{}, DirectLightSettings{}, true);
-    const ReceiverLighting gpu = cuda::shadeReceiversCuda(receivers, c.trace.view(), c.bvh.view(), &mipView,
+        shadeReceivers(receivers, c.trace.view(), c.bvh.view(), &mipView, nullptr, ConeSettings{}, DirectLightSettings{}, true);
+    const ReceiverLighting gpu = cuda::shadeReceiversCuda(receivers, c.trace.view(), c.bvh.view(), &mipView, nullptr,
                                                           ConeSettings{}, DirectLightSettings{}, true);
     checkDeterministicAgreement(gpu.direct.pixels, cpu.direct.pixels, "direct");
     checkDeterministicAgreement(gpu.indirect.pixels, cpu.indirect.pixels, "indirect");
+
+    // The gather points' cones, and texels interpolating them.
+    IrradianceCache cache(c.voxels, 2);
+    cache.gather(mipView, ConeSettings{});
+    const std::vector<vec3> gathered = cuda::gatherIrradianceCuda(cache.points(), mipView, ConeSettings{}, 1);
+    REQUIRE(gathered.size() == cache.irradiance().size());
+    std::vector<float> gpuPoints, cpuPoints;
+    for (size_t q = 0; q < gathered.size(); ++q)
+        for (int ch = 0; ch < 3; ++ch) {
+            gpuPoints.push_back(gathered[q][ch]);
+            cpuPoints.push_back(cache.irradiance()[q][ch]);
+        }
+    checkDeterministicAgreement(gpuPoints, cpuPoints, "gather points");
+    const IrradianceCacheView cacheView = cache.view(mipView);
+    const ReceiverLighting cpuCached = shadeReceivers(receivers, c.trace.view(), c.bvh.view(), &mipView, &cacheView,
+                                                      ConeSettings{}, DirectLightSettings{}, true);
+    const ReceiverLighting gpuCached = cuda::shadeReceiversCuda(receivers, c.trace.view(), c.bvh.view(), &mipView,
+                                                                &cacheView, ConeSettings{}, DirectLightSettings{}, true);
+    checkDeterministicAgreement(gpuCached.indirect.pixels, cpuCached.indirect.pixels, "interpolated indirect");
 }
 
 namespace {

@@ -138,8 +138,8 @@ int main(int argc, char** argv) {
              {std::tuple<const char*, const SurfaceSampleSet*, bool>{"receivers: lightmap", &texels, true},
               {"receivers: image", &pixels.receivers, false}}) {
             row(name, device.usable,
-                [&] { return shadeReceivers(*receivers, trace.view(), bvh.view(), &mipView, ConeSettings{}, DirectLightSettings{}, lightmap).indirect.pixels; },
-                [&] { return cuda::shadeReceiversCuda(*receivers, trace.view(), bvh.view(), &mipView, ConeSettings{}, DirectLightSettings{}, lightmap).indirect.pixels; });
+                [&] { return shadeReceivers(*receivers, trace.view(), bvh.view(), &mipView, nullptr, ConeSettings{}, DirectLightSettings{}, lightmap).indirect.pixels; },
+                [&] { return cuda::shadeReceiversCuda(*receivers, trace.view(), bvh.view(), &mipView, nullptr, ConeSettings{}, DirectLightSettings{}, lightmap).indirect.pixels; });
         }
         row("path tracing: image", device.usable, [&] { return renderCamera(trace, bvh, model, pathSettings).beauty.pixels; },
             [&] { return cuda::renderCameraCuda(trace, bvh, model, pathSettings).beauty.pixels; });

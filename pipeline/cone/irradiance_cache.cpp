@@ -1,0 +1,129 @@
+#include "cone/irradiance_cache.h"
+
+#include "cone/cone_set.h"
+#include "core/error.h"
+#include "core/progress.h"
+
+#include <nanovdb/util/GridBuilder.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <cmath>
+#include <string>
+#include <utility>
+
+namespace vl {
+
+namespace {
+
+constexpr int kMaxCacheLevel = 16;
+constexpr int kCoordLimit = 1 << 20;  // as radiance_mips.cpp: coordinates within ±2^20
+
+// A voxel side, keyed by its cell and face class; sorted by key, then by voxel, so the
+// points and their sums come out the same at any thread count.
+struct Side {
+    ivec3 cell;
+    int faceClass;
+    uint32_t voxel;
+    vec3 normal;
+
+    bool sameKey(const Side& o) const { return cell == o.cell && faceClass == o.faceClass; }
+    bool operator<(const Side& o) const {
+        if (cell.x != o.cell.x) return cell.x < o.cell.x;
+        if (cell.y != o.cell.y) return cell.y < o.cell.y;
+        if (cell.z != o.cell.z) return cell.z < o.cell.z;
+        if (faceClass != o.faceClass) return faceClass < o.faceClass;
+        return voxel < o.voxel;
+    }
+};
+
+}  // namespace
+
+IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level) : level_(level), voxelSize_(voxels.voxelSize) {
+    if (level < 0 || level > kMaxCacheLevel)
+        throw SettingsError("gather level " + std::to_string(level) + " is outside 0.." + std::to_string(kMaxCacheLevel));
+    const size_t n = voxels.size();
+    if (voxels.normal.size() != n || voxels.axisWeights.size() != n)
+        throw Error("IrradianceCache(" + voxels.sourceScene + "): normals or axis weights do not match the " +
+                    std::to_string(n) + " voxels");
+
+    std::vector<Side> sides;
+    sides.reserve(n * 2);
+    for (size_t i = 0; i < n; ++i) {
+        const ivec3& c = voxels.coords[i];
+        if (glm::any(glm::greaterThanEqual(glm::abs(c), ivec3(kCoordLimit))))
+            throw Error("IrradianceCache(" + voxels.sourceScene + "): voxel " + std::to_string(i) +
+                        " lies beyond ±2^20 voxels");
+        const VoxelSides s = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
+        const ivec3 cell(cellOf(c.x, level), cellOf(c.y, level), cellOf(c.z, level));
+        for (int k = 0; k < s.count; ++k)
+            sides.push_back({cell, dominantAxisFace(s.normal[k]), static_cast<uint32_t>(i), s.normal[k]});
+    }
+    tbb::parallel_sort(sides.begin(), sides.end());
+
+    nanovdb::GridBuilder<int32_t> builder(-1);
+    auto accessor = builder.getAccessor();
+    for (size_t begin = 0; begin < sides.size();) {
+        size_t end = begin;
+        glm::dvec3 position(0.0), normal(0.0);
+        for (; end < sides.size() && sides[end].sameKey(sides[begin]); ++end) {
+            position += glm::dvec3(voxels.centre(sides[end].voxel));
+            normal += glm::dvec3(sides[end].normal);
+        }
+        const ivec3 cell = sides[begin].cell;
+        if (begin == 0 || cell != sides[begin - 1].cell) {
+            accessor.setValue(nanovdb::Coord(cell.x, cell.y, cell.z), static_cast<int32_t>(cellBegin_.size()));
+            cellBegin_.push_back(static_cast<uint32_t>(points_.size()));
+        }
+        GatherPoint point;
+        point.position = vec3(position / double(end - begin));
+        point.turn = cellTurn(cell);
+        const double length = glm::length(normal);
+        // Side normals of one class all lean the same way, so the sum is far from zero.
+        point.normal = length > 0.0 ? vec3(normal / length) : sides[begin].normal;
+        points_.push_back(point);
+        begin = end;
+    }
+    cellBegin_.push_back(static_cast<uint32_t>(points_.size()));
+    cells_ = builder.getHandle<>(1.0, nanovdb::Vec3d(0.0), "gather_cells");
+    irradiance_.assign(points_.size(), vec3(0.0f));
+}
+
+void IrradianceCache::gather(const MipView& mips, const ConeSettings& settings, int turns, Progress* progress) {
+    validateConeSettings(settings);
+    if (turns < 1 || turns > kMaxGatherTurns)
+        throw SettingsError("gather turns " + std::to_string(turns) + " is outside 1.." + std::to_string(kMaxGatherTurns));
+    const ConeSet& set = coneSet(settings.coneCount);
+    irradiance_.assign(points_.size(), vec3(0.0f));
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, points_.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t q = range.begin(); q != range.end(); ++q) irradiance_[q] = gatherAtPoint(mips, points_[q], set, settings, turns);
+        if (progress) progress->advance(range.size());
+    });
+}
+
+void IrradianceCache::setIrradiance(std::vector<vec3> irradiance) {
+    if (irradiance.size() != points_.size())
+        throw Error("IrradianceCache: " + std::to_string(irradiance.size()) + " irradiance values for " +
+                    std::to_string(points_.size()) + " gather points");
+    irradiance_ = std::move(irradiance);
+}
+
+IrradianceCacheView IrradianceCache::view(const MipView& mips) const {
+    IrradianceCacheView view;
+    if (mips.levelCount > 0) view.occupancy = mips.levels[0];
+    view.cells = points_.empty() ? nullptr : cellGrid();
+    view.cellBegin = cellBegin_.data();
+    view.points = points_.data();
+    view.irradiance = irradiance_.data();
+    view.pointCount = static_cast<uint32_t>(points_.size());
+    view.voxelSize = static_cast<float>(voxelSize_);
+    view.level = level_;
+    return view;
+}
+
+size_t IrradianceCache::memoryBytes() const {
+    return cells_.size() + cellBegin_.size() * sizeof(uint32_t) + points_.size() * (sizeof(GatherPoint) + sizeof(vec3));
+}
+
+}  // namespace vl
