@@ -1,10 +1,10 @@
-// voxlight bench [scene.gltf | job.json] [-o dir]: speed against error (pipeline/bake/bench_run.h).
+// voxlight bench [scene.gltf | job.json] [-o dir]: speed against error (pipeline/bench/run.h).
 // Default scene: the Cycles Cornell quad of ../shared/reference, compared with Cycles' 4096-spp
 // lightmap and render, with the lower-spp Cycles files as a second Cycles curve; without
 // ../shared, the project's scenes/cornell_box.gltf against a path-traced reference.
 #include "tools/voxlight/commands.h"
 
-#include "bake/bench_run.h"
+#include "bench/run.h"
 #include "bake/job_file.h"
 #include "core/error.h"
 

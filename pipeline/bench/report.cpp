@@ -1,4 +1,4 @@
-#include "bake/bench_report.h"
+#include "bench/report.h"
 
 #include "core/atomic_file.h"
 #include "core/error.h"

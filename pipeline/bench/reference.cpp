@@ -1,6 +1,6 @@
-#include "bake/bench_reference.h"
+#include "bench/reference.h"
 
-#include "bake/bench_trace.h"
+#include "bench/traced_scene.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"

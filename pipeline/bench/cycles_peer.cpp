@@ -1,4 +1,4 @@
-#include "bake/bench_cycles.h"
+#include "bench/cycles_peer.h"
 
 #include "core/error.h"
 #include "core/image_io.h"

@@ -6,7 +6,7 @@
 // bench.md (a README-ready section embedding them, with the headline figures).
 #pragma once
 
-#include "bake/bench_run.h"
+#include "bench/run.h"
 
 #include <string>
 #include <utility>

@@ -1,9 +1,9 @@
 // voxlight bench: a tiny run end to end (its CSV has the declared columns and finite values),
 // the path-traced reference's cache key, and the time-to-reach interpolation on hand-made
 // fronts. The metrics themselves are tested in tests/metrics.
-#include "bake/bench_reference.h"
-#include "bake/bench_report.h"
-#include "bake/bench_run.h"
+#include "bench/reference.h"
+#include "bench/report.h"
+#include "bench/run.h"
 #include "core/error.h"
 #include "support/paths.h"
 
@@ -60,7 +60,7 @@ std::string readText(const fs::path& path) {
 
 }  // namespace
 
-TEST_CASE("A tiny bench run writes bench.csv with the declared columns and finite values", "[bake]") {
+TEST_CASE("A tiny bench run writes bench.csv with the declared columns and finite values", "[bench]") {
     const std::string out = test::tempDir("bench_tiny");
     fs::remove_all(out);
     const std::string cache = test::tempDir("bench_tiny_cache");
@@ -125,7 +125,7 @@ TEST_CASE("A tiny bench run writes bench.csv with the declared columns and finit
     CHECK(readText(fs::path(out) / "bench.md").find("| vct | cones=6 |") != std::string::npos);
 }
 
-TEST_CASE("A path-traced bench reference is cached under the content of the scene files", "[bake]") {
+TEST_CASE("A path-traced bench reference is cached under the content of the scene files", "[bench]") {
     const fs::path dir = test::tempDir("bench_hash");
     fs::remove_all(dir);
     fs::create_directories(dir / "a");
@@ -159,7 +159,7 @@ TEST_CASE("A path-traced bench reference is cached under the content of the scen
     CHECK_FALSE(prepareBenchReference(job, {}, settings).fromCache);
 }
 
-TEST_CASE("Bench time to reach an error follows the Pareto front on log-log axes", "[bake]") {
+TEST_CASE("Bench time to reach an error follows the Pareto front on log-log axes", "[bench]") {
     // (seconds, error); (8, 0.3) is dominated by (4, 0.2).
     const std::vector<std::pair<double, double>> points = {{16, 0.1}, {1, 0.4}, {8, 0.3}, {4, 0.2}};
     CHECK(paretoFront(points) == std::vector<size_t>{1, 3, 0});
@@ -176,7 +176,7 @@ TEST_CASE("Bench time to reach an error follows the Pareto front on log-log axes
     CHECK_FALSE(timeToReach({}, 0.1).found);
 }
 
-TEST_CASE("Bench refuses bad repeats and reports a bad VCT setting as a failed point", "[bake]") {
+TEST_CASE("Bench refuses bad repeats and reports a bad VCT setting as a failed point", "[bench]") {
     BenchOptions options;
     options.base = tinyJob(test::tempDir("bench_bad"));
     options.repeats = 0;
