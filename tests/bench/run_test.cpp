@@ -1,6 +1,8 @@
-// voxlight bench: a tiny run end to end (its CSV has the declared columns and finite values),
-// the path-traced reference's cache key, and the time-to-reach interpolation on hand-made
-// fronts. The metrics themselves are tested in tests/metrics.
+// voxlight bench: a tiny run end to end (its CSV has the declared columns and finite values;
+// its reports name no file by an absolute path), the path-traced reference's cache key, and
+// the time-to-reach interpolation on hand-made fronts. The metrics themselves are tested in
+// tests/metrics.
+#include "bench/display_path.h"
 #include "bench/reference.h"
 #include "bench/report.h"
 #include "bench/run.h"
@@ -8,11 +10,13 @@
 #include "support/paths.h"
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 
 using namespace vl;
@@ -56,6 +60,13 @@ std::string readText(const fs::path& path) {
     std::ostringstream out;
     out << in.rdbuf();
     return out.str();
+}
+
+// Every string value in a JSON document.
+void collectStrings(const nlohmann::json& j, std::vector<std::string>& out) {
+    if (j.is_string()) out.push_back(j.get<std::string>());
+    else if (j.is_structured())
+        for (const auto& item : j) collectStrings(item, out);
 }
 
 }  // namespace
@@ -123,6 +134,84 @@ TEST_CASE("A tiny bench run writes bench.csv with the declared columns and finit
         CHECK(fs::exists(fs::path(out) / file));
     }
     CHECK(readText(fs::path(out) / "bench.md").find("| vct | cones=6 |") != std::string::npos);
+}
+
+TEST_CASE("Bench reports name a file relative to the repository, ../shared or the bench folder", "[bench]") {
+    const std::string repo = test::sourceDir();
+    const std::string out = "/nonexistent-voxlight-bench/out";  // outside the repository
+    CHECK(displayPath(repo + "/scenes/cornell_box.gltf", out) == "scenes/cornell_box.gltf");
+    CHECK(displayPath(repo + "/../shared/reference/cornell_quad.gltf", out) == "../shared/reference/cornell_quad.gltf");
+    CHECK(displayPath(out + "/points/cycles-spp=16/blender.log", out) == "points/cycles-spp=16/blender.log");
+    CHECK(displayPath(out + "/cache/a/image.exr", out + "/") == "cache/a/image.exr");
+    // The repository first: the README's commands run from its root, whatever the bench folder.
+    CHECK(displayPath(repo + "/output/bench/plot/gnuplot.log", repo + "/output/bench") == "output/bench/plot/gnuplot.log");
+    // Outside all three, or already relative: as given.
+    CHECK(displayPath("/nonexistent-voxlight-bench/elsewhere/x.exr", out) == "/nonexistent-voxlight-bench/elsewhere/x.exr");
+    CHECK(displayPath(repo + "-other/x.exr", out) == repo + "-other/x.exr");  // a sibling sharing the name's start
+    CHECK(displayPath(out + "/x.exr", "") == out + "/x.exr");
+    CHECK(displayPath("../elsewhere/x.exr", out) == "../elsewhere/x.exr");
+}
+
+TEST_CASE("A bench's reports name no file by this machine's absolute paths", "[bench]") {
+    // The bench folder outside the repository (one per build folder), so that what lies in it
+    // is named relative to it; the scene is named by its absolute path in the repository.
+    const fs::path out = fs::temp_directory_path() /
+                         ("voxlight-bench-paths-" + std::to_string(std::hash<std::string>{}(VOXLIGHT_BINARY_DIR)));
+    REQUIRE(fs::weakly_canonical(out).lexically_relative(fs::weakly_canonical(test::sourceDir())).string().rfind("..", 0) == 0);
+    fs::remove_all(out);
+    const BakeJob job = tinyJob(out.string());
+    REQUIRE(fs::path(job.scenePath).is_absolute());
+    const BenchReferenceSettings settings = tinyReference((out / "cache").string());
+    // A user-named reference image (a path-traced one from the cache), and the lightmap
+    // reference it leaves to the path tracer cached beforehand: the report names both.
+    const BenchReference traced = prepareBenchReference(job, {}, settings);
+    BenchReferenceFiles files;
+    files.image = traced.cachePath + "/image.exr";
+    const BenchReference lightmapOnly = prepareBenchReference(job, files, settings);
+    // A Cycles files folder: one lower-spp lightmap, named as ../shared/reference/cycles names them.
+    fs::create_directories(out / "cycles");
+    fs::copy_file(fs::path(traced.cachePath) / "lightmap.exr", out / "cycles/cornell_box_lightmap_16spp.exr");
+
+    BenchOptions options;
+    options.base = job;
+    options.points = {{"vct", "default", {}, 0}};
+    options.repeats = 1;
+    options.reference = files;
+    options.referenceSettings = settings;
+    options.cyclesFilesDir = (out / "cycles").string();
+    options.blender = "none";
+    options.plot = false;
+    options.quiet = true;
+    const BenchResult result = runBench(options);
+    REQUIRE(result.reference.fromCache);
+    REQUIRE(result.points.size() == 2);
+
+    const std::string json = readText(out / "bench.json"), md = readText(out / "bench.md"), csv = readText(out / "bench.csv");
+    const nlohmann::json j = nlohmann::json::parse(json);
+    CHECK(j["scene"] == "scenes/cornell_box.gltf");
+    const std::string image = "image: cache/" + fs::path(traced.cachePath).filename().string() + "/image.exr";
+    const std::string cache = "[cached in cache/" + fs::path(lightmapOnly.cachePath).filename().string() + "]";
+    const std::string description = j["reference"]["description"];
+    CHECK(description.find(image) != std::string::npos);
+    CHECK(description.find(cache) != std::string::npos);
+    CHECK(md.find(image) != std::string::npos);
+    CHECK(md.find(cache) != std::string::npos);
+    std::vector<std::string> outputs;
+    for (const auto& p : j["points"]) outputs.push_back(p["outputs"]);
+    CHECK(outputs == std::vector<std::string>{"points/vct-default", "cycles"});
+
+    std::vector<std::string> strings;
+    collectStrings(j, strings);
+    for (const std::string& s : strings) {
+        INFO(s);
+        CHECK(s.rfind('/', 0) != 0);
+    }
+    for (const std::string& absolute : {test::sourceDir(), out.string(), fs::weakly_canonical(out).string()}) {
+        INFO(absolute);
+        CHECK(json.find(absolute) == std::string::npos);
+        CHECK(md.find(absolute) == std::string::npos);
+        CHECK(csv.find(absolute) == std::string::npos);
+    }
 }
 
 TEST_CASE("A path-traced bench reference is cached under the content of the scene files", "[bench]") {
