@@ -1,11 +1,12 @@
-// voxlight bench [scene.gltf | job.json] [-o dir]: speed against error (pipeline/bake/bench_run.h).
+// voxlight bench [scene.gltf | job.json] [-o dir]: speed against error (pipeline/bench/run.h).
 // Default scene: the Cycles Cornell quad of ../shared/reference, compared with Cycles' 4096-spp
 // lightmap and render, with the lower-spp Cycles files as a second Cycles curve; without
 // ../shared, the project's scenes/cornell_box.gltf against a path-traced reference.
 #include "tools/voxlight/commands.h"
 
-#include "bake/bench_run.h"
 #include "bake/job_file.h"
+#include "bench/display_path.h"
+#include "bench/run.h"
 #include "core/error.h"
 
 #include <algorithm>
@@ -147,7 +148,9 @@ BenchOptions plan(const BenchCliOptions& o) {
     return options;
 }
 
-// This process's command line (for the report's "regenerate with"), the binary as build/voxlight.
+// This process's command line (for the report's "regenerate with"), the binary as build/voxlight
+// and paths as run from the repository's root (never relative to the bench folder: the line is
+// not run there).
 std::string commandLine() {
     std::ifstream in("/proc/self/cmdline", std::ios::binary);
     std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -160,8 +163,11 @@ std::string commandLine() {
     }
     std::string line = "build/voxlight";
     for (size_t i = 1; i < args.size(); ++i) {
-        const bool plain = !args[i].empty() && args[i].find_first_of(" ;'\"$`\\*?()<>|&") == std::string::npos;
-        line += " " + (plain ? args[i] : "'" + args[i] + "'");
+        const size_t eq = args[i].rfind("--", 0) == 0 ? args[i].find('=') : std::string::npos;  // --name=value
+        const std::string arg = eq == std::string::npos ? displayPath(args[i], "")
+                                                        : args[i].substr(0, eq + 1) + displayPath(args[i].substr(eq + 1), "");
+        const bool plain = !arg.empty() && arg.find_first_of(" ;'\"$`\\*?()<>|&") == std::string::npos;
+        line += " " + (plain ? arg : "'" + arg + "'");
     }
     return line;
 }

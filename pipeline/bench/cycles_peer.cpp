@@ -1,5 +1,6 @@
-#include "bake/bench_cycles.h"
+#include "bench/cycles_peer.h"
 
+#include "bench/display_path.h"
 #include "core/error.h"
 #include "core/image_io.h"
 
@@ -67,7 +68,7 @@ CyclesPeer findCyclesPeer(const BenchOptions& options) {
     }
     peer.script = options.cyclesScript;
     if (peer.script.empty() || !fs::exists(peer.script)) {
-        peer.why = "no Cycles peer: the Blender script '" + peer.script + "' is missing";
+        peer.why = "no Cycles peer: the Blender script '" + displayPath(peer.script, options.base.outputDir) + "' is missing";
         return peer;
     }
     peer.available = true;
@@ -93,7 +94,8 @@ void runCyclesPoint(const BenchOptions& options, const CyclesPeer& peer, BenchPo
     fs::remove(dir / "cycles.json");
     const int status = std::system(command.c_str());
     if (status != 0 || !fs::exists(dir / "cycles.json"))
-        throw Error("blender failed (status " + std::to_string(status) + "), log " + log.string() + ":\n" + tail(log, 1500));
+        throw Error("blender failed (status " + std::to_string(status) + "), log " +
+                    displayPath(log.string(), options.base.outputDir) + ":\n" + tail(log, 1500));
     const nlohmann::json times = readJson(dir / "cycles.json");
     if (times.contains("lightmap_seconds")) {
         p.lightmapRuns.push_back(times["lightmap_seconds"].get<double>());

@@ -1,9 +1,9 @@
 // voxlight bench: speed against error. For one scene it sweeps the bake's settings (VCT)
 // and the path tracer's spp (and Cycles' spp when Blender is on the PATH), times every
 // point in this one process (median of repeats), measures its peak memory and its error
-// against one reference (bench_reference.h) on the lightmap's covered texels and on the
+// against one reference (reference.h) on the lightmap's covered texels and on the
 // image, total and indirect, and writes bench.csv, bench.json, a time-against-error plot,
-// error heat maps and a Markdown report (bench_report.h).
+// error heat maps and a Markdown report (report.h).
 //
 // Times: a VCT point runs the whole bake (load, voxelize, voxel light, bounces, mips, BVH,
 // receivers, shading, EXR writes; no grids file); its lightmap time is the bake without the
@@ -12,7 +12,7 @@
 #pragma once
 
 #include "bake/bake_job.h"
-#include "bake/bench_reference.h"
+#include "bench/reference.h"
 #include "metrics/metrics.h"
 
 #include <string>

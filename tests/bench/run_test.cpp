@@ -1,18 +1,22 @@
-// voxlight bench: a tiny run end to end (its CSV has the declared columns and finite values),
-// the path-traced reference's cache key, and the time-to-reach interpolation on hand-made
-// fronts. The metrics themselves are tested in tests/metrics.
-#include "bake/bench_reference.h"
-#include "bake/bench_report.h"
-#include "bake/bench_run.h"
+// voxlight bench: a tiny run end to end (its CSV has the declared columns and finite values;
+// its reports name no file by an absolute path), the path-traced reference's cache key, and
+// the time-to-reach interpolation on hand-made fronts. The metrics themselves are tested in
+// tests/metrics.
+#include "bench/display_path.h"
+#include "bench/reference.h"
+#include "bench/report.h"
+#include "bench/run.h"
 #include "core/error.h"
 #include "support/paths.h"
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 
 using namespace vl;
@@ -58,9 +62,16 @@ std::string readText(const fs::path& path) {
     return out.str();
 }
 
+// Every string value in a JSON document.
+void collectStrings(const nlohmann::json& j, std::vector<std::string>& out) {
+    if (j.is_string()) out.push_back(j.get<std::string>());
+    else if (j.is_structured())
+        for (const auto& item : j) collectStrings(item, out);
+}
+
 }  // namespace
 
-TEST_CASE("A tiny bench run writes bench.csv with the declared columns and finite values", "[bake]") {
+TEST_CASE("A tiny bench run writes bench.csv with the declared columns and finite values", "[bench]") {
     const std::string out = test::tempDir("bench_tiny");
     fs::remove_all(out);
     const std::string cache = test::tempDir("bench_tiny_cache");
@@ -125,7 +136,85 @@ TEST_CASE("A tiny bench run writes bench.csv with the declared columns and finit
     CHECK(readText(fs::path(out) / "bench.md").find("| vct | cones=6 |") != std::string::npos);
 }
 
-TEST_CASE("A path-traced bench reference is cached under the content of the scene files", "[bake]") {
+TEST_CASE("Bench reports name a file relative to the repository, ../shared or the bench folder", "[bench]") {
+    const std::string repo = test::sourceDir();
+    const std::string out = "/nonexistent-voxlight-bench/out";  // outside the repository
+    CHECK(displayPath(repo + "/scenes/cornell_box.gltf", out) == "scenes/cornell_box.gltf");
+    CHECK(displayPath(repo + "/../shared/reference/cornell_quad.gltf", out) == "../shared/reference/cornell_quad.gltf");
+    CHECK(displayPath(out + "/points/cycles-spp=16/blender.log", out) == "points/cycles-spp=16/blender.log");
+    CHECK(displayPath(out + "/cache/a/image.exr", out + "/") == "cache/a/image.exr");
+    // The repository first: the README's commands run from its root, whatever the bench folder.
+    CHECK(displayPath(repo + "/output/bench/plot/gnuplot.log", repo + "/output/bench") == "output/bench/plot/gnuplot.log");
+    // Outside all three, or already relative: as given.
+    CHECK(displayPath("/nonexistent-voxlight-bench/elsewhere/x.exr", out) == "/nonexistent-voxlight-bench/elsewhere/x.exr");
+    CHECK(displayPath(repo + "-other/x.exr", out) == repo + "-other/x.exr");  // a sibling sharing the name's start
+    CHECK(displayPath(out + "/x.exr", "") == out + "/x.exr");
+    CHECK(displayPath("../elsewhere/x.exr", out) == "../elsewhere/x.exr");
+}
+
+TEST_CASE("A bench's reports name no file by this machine's absolute paths", "[bench]") {
+    // The bench folder outside the repository (one per build folder), so that what lies in it
+    // is named relative to it; the scene is named by its absolute path in the repository.
+    const fs::path out = fs::temp_directory_path() /
+                         ("voxlight-bench-paths-" + std::to_string(std::hash<std::string>{}(VOXLIGHT_BINARY_DIR)));
+    REQUIRE(fs::weakly_canonical(out).lexically_relative(fs::weakly_canonical(test::sourceDir())).string().rfind("..", 0) == 0);
+    fs::remove_all(out);
+    const BakeJob job = tinyJob(out.string());
+    REQUIRE(fs::path(job.scenePath).is_absolute());
+    const BenchReferenceSettings settings = tinyReference((out / "cache").string());
+    // A user-named reference image (a path-traced one from the cache), and the lightmap
+    // reference it leaves to the path tracer cached beforehand: the report names both.
+    const BenchReference traced = prepareBenchReference(job, {}, settings);
+    BenchReferenceFiles files;
+    files.image = traced.cachePath + "/image.exr";
+    const BenchReference lightmapOnly = prepareBenchReference(job, files, settings);
+    // A Cycles files folder: one lower-spp lightmap, named as ../shared/reference/cycles names them.
+    fs::create_directories(out / "cycles");
+    fs::copy_file(fs::path(traced.cachePath) / "lightmap.exr", out / "cycles/cornell_box_lightmap_16spp.exr");
+
+    BenchOptions options;
+    options.base = job;
+    options.points = {{"vct", "default", {}, 0}};
+    options.repeats = 1;
+    options.reference = files;
+    options.referenceSettings = settings;
+    options.cyclesFilesDir = (out / "cycles").string();
+    options.blender = "none";
+    options.plot = false;
+    options.quiet = true;
+    const BenchResult result = runBench(options);
+    REQUIRE(result.reference.fromCache);
+    REQUIRE(result.points.size() == 2);
+
+    const std::string json = readText(out / "bench.json"), md = readText(out / "bench.md"), csv = readText(out / "bench.csv");
+    const nlohmann::json j = nlohmann::json::parse(json);
+    CHECK(j["scene"] == "scenes/cornell_box.gltf");
+    const std::string image = "image: cache/" + fs::path(traced.cachePath).filename().string() + "/image.exr";
+    const std::string cache = "[cached in cache/" + fs::path(lightmapOnly.cachePath).filename().string() + "]";
+    const std::string description = j["reference"]["description"];
+    CHECK(description.find(image) != std::string::npos);
+    CHECK(description.find(cache) != std::string::npos);
+    CHECK(md.find(image) != std::string::npos);
+    CHECK(md.find(cache) != std::string::npos);
+    std::vector<std::string> outputs;
+    for (const auto& p : j["points"]) outputs.push_back(p["outputs"]);
+    CHECK(outputs == std::vector<std::string>{"points/vct-default", "cycles"});
+
+    std::vector<std::string> strings;
+    collectStrings(j, strings);
+    for (const std::string& s : strings) {
+        INFO(s);
+        CHECK(s.rfind('/', 0) != 0);
+    }
+    for (const std::string& absolute : {test::sourceDir(), out.string(), fs::weakly_canonical(out).string()}) {
+        INFO(absolute);
+        CHECK(json.find(absolute) == std::string::npos);
+        CHECK(md.find(absolute) == std::string::npos);
+        CHECK(csv.find(absolute) == std::string::npos);
+    }
+}
+
+TEST_CASE("A path-traced bench reference is cached under the content of the scene files", "[bench]") {
     const fs::path dir = test::tempDir("bench_hash");
     fs::remove_all(dir);
     fs::create_directories(dir / "a");
@@ -159,7 +248,7 @@ TEST_CASE("A path-traced bench reference is cached under the content of the scen
     CHECK_FALSE(prepareBenchReference(job, {}, settings).fromCache);
 }
 
-TEST_CASE("Bench time to reach an error follows the Pareto front on log-log axes", "[bake]") {
+TEST_CASE("Bench time to reach an error follows the Pareto front on log-log axes", "[bench]") {
     // (seconds, error); (8, 0.3) is dominated by (4, 0.2).
     const std::vector<std::pair<double, double>> points = {{16, 0.1}, {1, 0.4}, {8, 0.3}, {4, 0.2}};
     CHECK(paretoFront(points) == std::vector<size_t>{1, 3, 0});
@@ -176,7 +265,7 @@ TEST_CASE("Bench time to reach an error follows the Pareto front on log-log axes
     CHECK_FALSE(timeToReach({}, 0.1).found);
 }
 
-TEST_CASE("Bench refuses bad repeats and reports a bad VCT setting as a failed point", "[bake]") {
+TEST_CASE("Bench refuses bad repeats and reports a bad VCT setting as a failed point", "[bench]") {
     BenchOptions options;
     options.base = tinyJob(test::tempDir("bench_bad"));
     options.repeats = 0;

@@ -4,7 +4,7 @@
 // their timings.json) as a second, labelled, curve.
 #pragma once
 
-#include "bake/bench_run.h"
+#include "bench/run.h"
 
 #include <filesystem>
 #include <functional>

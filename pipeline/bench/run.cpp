@@ -1,8 +1,8 @@
-#include "bake/bench_run.h"
+#include "bench/run.h"
 
-#include "bake/bench_cycles.h"
-#include "bake/bench_report.h"
-#include "bake/bench_trace.h"
+#include "bench/cycles_peer.h"
+#include "bench/report.h"
+#include "bench/traced_scene.h"
 #include "core/error.h"
 #include "core/image_io.h"
 

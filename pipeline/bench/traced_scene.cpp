@@ -1,4 +1,4 @@
-#include "bake/bench_trace.h"
+#include "bench/traced_scene.h"
 
 #include "core/diagnostics.h"
 #include "scene/gltf_loader.h"

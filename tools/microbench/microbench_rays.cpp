@@ -1,7 +1,7 @@
 // Rays per second of the voxlight BVH (closest hit and any hit) against Embree 3's
 // single-ray queries (rtcIntersect1 / rtcOccluded1) on the same rays, in the same run.
 //
-//   build/bench/bench_rays [scene.glb] [--width W] [--height H] [--repeats N]
+//   build/microbench/microbench_rays [scene.glb] [--width W] [--height H] [--repeats N]
 //
 // Default scene: ../shared/scenes/interior-zdm2-godot/zdm2.glb. Rays: primary rays of a
 // pinhole camera at a viewpoint inside the level, cosine-distributed secondary rays from
@@ -176,7 +176,7 @@ int main(int argc, char** argv) {
         else if (arg == "--repeats" && i + 1 < argc) repeats = std::atoi(argv[++i]);
         else if (arg.rfind("--", 0) != 0) path = arg;
         else {
-            std::fprintf(stderr, "usage: bench_rays [scene.glb] [--width W] [--height H] [--repeats N]\n");
+            std::fprintf(stderr, "usage: microbench_rays [scene.glb] [--width W] [--height H] [--repeats N]\n");
             return 2;
         }
     }
@@ -391,7 +391,7 @@ int main(int argc, char** argv) {
 #endif
         return 0;
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "bench_rays: %s\n", e.what());
+        std::fprintf(stderr, "microbench_rays: %s\n", e.what());
         return 1;
     }
 }

@@ -2,7 +2,7 @@
 // distance, narrow band of 1 voxel: about the voxels a conservative voxelization touches)
 // on the same triangles at the same voxel size, in one run.
 //
-//   build/bench/bench_voxelize [scene.glb] [resolution ...]
+//   build/microbench/microbench_voxelize [scene.glb] [resolution ...]
 // Default: ../shared/scenes/interior-zdm2-godot/zdm2.glb at resolutions 256 and 512.
 // Each timing is the best of a few repetitions (wall clock, all TBB threads).
 #include "scene/gltf_loader.h"
@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
     try {
         scene = vl::loadGltf(path);
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "bench_voxelize: %s\n", e.what());
+        std::fprintf(stderr, "microbench_voxelize: %s\n", e.what());
         return 1;
     }
 

@@ -1,5 +1,6 @@
-#include "bake/bench_report.h"
+#include "bench/report.h"
 
+#include "bench/display_path.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -150,7 +151,7 @@ nlohmann::json nanToNull(double v) { return std::isfinite(v) ? nlohmann::json(v)
 
 void writeJson(BenchResult& r, const nlohmann::json& headline) {
     nlohmann::json j;
-    j["scene"] = r.scenePath;
+    j["scene"] = displayPath(r.scenePath, r.outputDir);
     j["tool_version"] = VOXLIGHT_VERSION;
     j["threads"] = r.threads;
     j["repeats"] = r.repeats;
@@ -172,7 +173,7 @@ void writeJson(BenchResult& r, const nlohmann::json& headline) {
                           {"cpu_runs", p.cpuRuns}, {"peak_memory_bytes", p.peakMemoryBytes},
                           {"lightmap", errorJson(p.lightmap)}, {"lightmap_indirect", errorJson(p.lightmapIndirect)},
                           {"image", errorJson(p.image)}, {"image_indirect", errorJson(p.imageIndirect)},
-                          {"outputs", p.outputDir}});
+                          {"outputs", displayPath(p.outputDir, r.outputDir)}});
     }
     j["points"] = points;
     writeText(fs::path(r.outputDir) / "bench.json", j.dump(2) + "\n");
@@ -290,7 +291,8 @@ void writePlot(BenchResult& r, const BenchOptions& options) {
     const fs::path dir = fs::path(r.outputDir) / "plot";
     fs::create_directories(dir);
     std::ostringstream gp;
-    gp << "# gnuplot script written by voxlight bench; run from " << r.outputDir << ": gnuplot plot/bench.gp\n";
+    gp << "# gnuplot script written by voxlight bench; run from the bench folder (this folder's parent): gnuplot "
+          "plot/bench.gp\n";
     gp << "set terminal pngcairo size 1500,620 font 'sans,10' noenhanced\nset output 'bench.png'\n";
     gp << "set multiplot layout 1,2 title \"" << fs::path(r.scenePath).filename().string()
        << ": wall time (median) against relative RMSE vs the reference; lines join each method's Pareto front\"\n";
@@ -335,7 +337,7 @@ void writePlot(BenchResult& r, const BenchOptions& options) {
     }
     const std::string command = "cd '" + r.outputDir + "' && gnuplot plot/bench.gp > plot/gnuplot.log 2>&1";
     if (std::system(command.c_str()) != 0 || !fs::exists(fs::path(r.outputDir) / "bench.png"))
-        r.notes.push_back("gnuplot failed: see " + (dir / "gnuplot.log").string());
+        r.notes.push_back("gnuplot failed: see " + displayPath((dir / "gnuplot.log").string(), r.outputDir));
     else
         r.files.push_back("bench.png");
 }

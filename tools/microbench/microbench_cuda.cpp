@@ -7,7 +7,7 @@
 // cuda/launchers.h). GPU timings include the copies to and from the device. Without a
 // usable GPU it prints the CPU columns and says why.
 //
-// Run: build/bench/bench_cuda [scene.gltf] [--resolution N] [--lightmap-res N] [--size N] [--spp N]
+// Run: build/microbench/microbench_cuda [scene.gltf] [--resolution N] [--lightmap-res N] [--size N] [--spp N]
 #include "bake/receivers.h"
 #include "bake/shade_receivers.h"
 #include "cone/radiance_mips.h"

@@ -1,6 +1,6 @@
 // Cone-tracing throughput: irradiance gathers per second for 6/16/32 cones, mip build and
 // one voxel bounce, on a closed box of radiating walls (the Cornell-box situation: every
-// cone ends on a wall). Run: build/bench/bench_cone
+// cone ends on a wall). Run: build/microbench/microbench_cone
 #include "cone/bounces.h"
 #include "cone/cone_trace.h"
 

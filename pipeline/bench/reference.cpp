@@ -1,6 +1,7 @@
-#include "bake/bench_reference.h"
+#include "bench/reference.h"
 
-#include "bake/bench_trace.h"
+#include "bench/display_path.h"
+#include "bench/traced_scene.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -267,7 +268,8 @@ BenchReference prepareBenchReference(const BakeJob& job, const BenchReferenceFil
                                  " x " + std::to_string(image->height) + " but the bake's atlas is " +
                                  std::to_string(b.lightmap.width) + " x " + std::to_string(b.lightmap.height) +
                                  " (set --lightmap-res)");
-        parts.push_back("lightmap: " + files.lightmap + (ref.hasLightmapIndirect ? " (direct: " + files.lightmapDirect + ")" : ""));
+        parts.push_back("lightmap: " + displayPath(files.lightmap, job.outputDir) +
+                        (ref.hasLightmapIndirect ? " (direct: " + displayPath(files.lightmapDirect, job.outputDir) + ")" : ""));
     }
     if (images && !files.image.empty()) {
         ref.image = readImage(files.image);
@@ -279,10 +281,10 @@ BenchReference prepareBenchReference(const BakeJob& job, const BenchReferenceFil
             throw InputError(files.image + ": the reference image is " + std::to_string(ref.image.width) + " x " +
                              std::to_string(ref.image.height) + " but the bake renders " +
                              std::to_string(job.settings.imageWidth) + " x " + std::to_string(job.settings.imageHeight));
-        parts.push_back("image: " + files.image);
+        parts.push_back("image: " + displayPath(files.image, job.outputDir));
     }
     for (const std::string& p : parts) ref.description += (ref.description.empty() ? "" : "; ") + p;
-    if (ref.fromCache) ref.description += " [cached in " + ref.cachePath + "]";
+    if (ref.fromCache) ref.description += " [cached in " + displayPath(ref.cachePath, job.outputDir) + "]";
     return ref;
 }
 

@@ -47,7 +47,7 @@ struct BenchReference {
     double imageNoise = 0.0;
     int lightmapSpp = 0;
     int imageSpp = 0;
-    std::string description;  // one line for reports: where it came from
+    std::string description;  // one line for reports: where it came from (files named by displayPath)
     std::string cachePath;    // the cache folder of a path-traced reference
     bool fromCache = false;
 };

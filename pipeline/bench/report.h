@@ -3,10 +3,11 @@
 // (gnuplot: wall time against relative RMSE on log axes, lightmap and image, each method's
 // Pareto front drawn as a line), heatmaps/ (per-texel / per-pixel relative error, EXR and a
 // colour PNG, for the VCT default and each other method's point nearest its error) and
-// bench.md (a README-ready section embedding them, with the headline figures).
+// bench.md (a README-ready section embedding them, with the headline figures). They name
+// files as displayPath does (display_path.h): never by this machine's absolute paths.
 #pragma once
 
-#include "bake/bench_run.h"
+#include "bench/run.h"
 
 #include <string>
 #include <utility>

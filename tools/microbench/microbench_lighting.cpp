@@ -4,7 +4,7 @@
 // spent stepping, the 1 → 2 thread speed-up, and HDDA empty-space skipping against plain
 // one-voxel DDA steps. Every ratio is taken in the same run, beside its peer.
 //
-// Run: build/bench/bench_lighting [scene.glb] [resolution ...]
+// Run: build/microbench/microbench_lighting [scene.glb] [resolution ...]
 #include "core/error.h"
 #include "lighting/lighting.h"
 #include "scene/gltf_loader.h"
@@ -135,7 +135,7 @@ int main(int argc, char** argv) {
                         same ? "yes" : "NO");
         }
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "bench_lighting: %s\n", e.what());
+        std::fprintf(stderr, "microbench_lighting: %s\n", e.what());
         return 1;
     }
     return 0;
