@@ -100,8 +100,7 @@ bool gpuUsable() { return cuda::probeDevice().usable; }
 #define VL_SKIP_WITHOUT_GPU()                                                                     \
     do {                                                                                          \
         if (!gpuUsable()) {                                                                       \
-            WARN("skipped (no GPU): " << cuda::probeDevice().description);                        \
-            return;                                                                               \
+            VL_SKIP("no GPU: " << cuda::probeDevice().description);                               \
         }                                                                                         \
     } while (0)
 
@@ -150,8 +149,7 @@ TEST_CASE("Device choices parse and a wrong one names the option", "[cuda]") {
 TEST_CASE("Without a usable GPU auto runs on the CPU and says why", "[cuda]") {
     const cuda::DeviceStatus status = cuda::probeDevice();
     if (status.usable) {
-        WARN("skipped: this machine has a GPU (" << status.description << ")");
-        return;
+        VL_SKIP("this machine has a GPU (" << status.description << ")");
     }
     REQUIRE_FALSE(status.description.empty());
     std::ostringstream messages;
@@ -162,8 +160,7 @@ TEST_CASE("Without a usable GPU auto runs on the CPU and says why", "[cuda]") {
 TEST_CASE("Without a usable GPU --device cuda and every launcher are clear errors", "[cuda]") {
     const cuda::DeviceStatus status = cuda::probeDevice();
     if (status.usable) {
-        WARN("skipped: this machine has a GPU (" << status.description << ")");
-        return;
+        VL_SKIP("this machine has a GPU (" << status.description << ")");
     }
     std::ostringstream messages;
     CHECK_THROWS_WITH(cuda::resolveDevice(cuda::DeviceChoice::Cuda, messages), "--device cuda: " + status.description);
@@ -429,8 +426,7 @@ std::string stderrOf(F&& work) {
 TEST_CASE("A bake with device auto and no GPU says why and gives the CPU bake", "[cuda]") {
     const cuda::DeviceStatus status = cuda::probeDevice();
     if (status.usable) {
-        WARN("skipped: this machine has a GPU (" << status.description << ")");
-        return;
+        VL_SKIP("this machine has a GPU (" << status.description << ")");
     }
     const Cornell& c = cornell();
     Diagnostics diagnostics(false, false);
@@ -447,8 +443,7 @@ TEST_CASE("A bake with device auto and no GPU says why and gives the CPU bake", 
 TEST_CASE("A bake with device cuda and no GPU fails before any work with the reason", "[cuda]") {
     const cuda::DeviceStatus status = cuda::probeDevice();
     if (status.usable) {
-        WARN("skipped: this machine has a GPU (" << status.description << ")");
-        return;
+        VL_SKIP("this machine has a GPU (" << status.description << ")");
     }
     Diagnostics diagnostics(false, false);
     CHECK_THROWS_WITH(bake(cornell().scene, tinyBake(cuda::DeviceChoice::Cuda), diagnostics),

@@ -2,6 +2,8 @@
 // the checkout in CI; a test that needs it says it is skipping when it is absent.
 #pragma once
 
+#include "support/skip.h"
+
 #include <filesystem>
 #include <string>
 
@@ -18,11 +20,7 @@ inline std::string tempDir(const std::string& name) {
 
 }  // namespace vl::test
 
-// Catch2 v2 has no SKIP: say why and leave the test case.
-#define VL_SKIP_WITHOUT_SHARED()                                                  \
-    do {                                                                          \
-        if (!vl::test::haveShared()) {                                            \
-            WARN("skipped: " << vl::test::sharedDir() << " is absent");           \
-            return;                                                               \
-        }                                                                         \
+#define VL_SKIP_WITHOUT_SHARED()                                                      \
+    do {                                                                              \
+        if (!vl::test::haveShared()) VL_SKIP(vl::test::sharedDir() << " is absent");  \
     } while (0)

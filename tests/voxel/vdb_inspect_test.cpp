@@ -171,8 +171,7 @@ TEST_CASE("A slice image covers the grid and shows inactive voxels apart from ze
 
 TEST_CASE("inspect reads a .vdb written by pyopenvdb", "[voxel]") {
     if (!pyopenvdbAvailable()) {
-        WARN("skipped: /usr/bin/python3 with pyopenvdb (package python3-openvdb) is not available");
-        return;
+        VL_SKIP("/usr/bin/python3 with pyopenvdb (package python3-openvdb) is not available");
     }
     const std::string dir = test::tempDir("vdb_inspect_py");
     const std::string vdbPath = dir + "/from_python.vdb";
