@@ -45,7 +45,7 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
                  throw SettingsError("setting attenuation: coefficients must be finite, non-negative, not all zero");
              s.lighting.attenuation = k;
          }},
-        {"voxel-emitter-strata", "n × n points per emissive triangle in the voxel lighting pass (default 3)",
+        {"voxel-emitter-strata", "n × n visibility points per emissive triangle in the voxel lighting pass (default 1)",
          [](S& s, const std::string& v) { s.lighting.emitterStrata = parseIntSetting("voxel-emitter-strata", v, 1, 32); }},
         {"hdda", "skip empty space with NanoVDB's HDDA when stepping toward lights (default true)",
          [](S& s, const std::string& v) {

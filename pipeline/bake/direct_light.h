@@ -9,6 +9,7 @@
 // plain stratified estimate. VL_HOSTDEV so the CUDA bake reuses it.
 #pragma once
 
+#include "core/polygon_irradiance.h"
 #include "core/rng.h"
 #include "core/sampling.h"
 #include "trace/path_kernels.h"
@@ -17,44 +18,25 @@
 
 namespace vl {
 
-// Clips polygon `in` (count ≤ 3 vertices, relative to the receiver) to the half-space
-// dot(x, n) ≥ 0; returns the clipped vertex count (≤ 4).
-VL_HOSTDEV inline int clipToHemisphere(const vec3* in, int count, const vec3& n, vec3* out) {
-    int outCount = 0;
-    for (int i = 0; i < count; ++i) {
-        const vec3& a = in[i];
-        const vec3& b = in[(i + 1) % count];
-        const float da = glm::dot(a, n);
-        const float db = glm::dot(b, n);
-        if (da >= 0.0f) out[outCount++] = a;
-        if ((da >= 0.0f) != (db >= 0.0f)) out[outCount++] = a + (b - a) * (da / (da - db));
-    }
-    return outCount;
-}
-
-// Lambert's formula: the irradiance at the origin, normal n, from a polygon of unit radiance
-// (vertices relative to the receiver, above its tangent plane): ½ |Σ_i Θ_i (Γ̂_i · n)|.
-VL_HOSTDEV inline float polygonIrradiance(const vec3* vertices, int count, const vec3& n) {
-    float sum = 0.0f;
-    for (int i = 0; i < count; ++i) {
-        const vec3 a = glm::normalize(vertices[i]);
-        const vec3 b = glm::normalize(vertices[(i + 1) % count]);
-        const vec3 c = glm::cross(a, b);
-        const float sinTheta = glm::length(c);
-        const float theta = glm::atan(sinTheta, glm::dot(a, b));
-        if (sinTheta > 0.0f) sum += theta * glm::dot(c / sinTheta, n);
-    }
-    return 0.5f * glm::abs(sum);
-}
-
 struct DirectLightSettings {
     int emitterStrata = 4;  // n: n × n visibility points per emissive triangle
 };
 
 // Irradiance from emissive triangle `emitter` at receiver (p, ng, ns): ng is the geometric
-// normal on the receiving side, ns the shading normal.
+// normal on the receiving side, ns the shading normal. Stratum (i, j) of the n × n points is
+// jittered by its own generator (seed, `stream`·n² + its index).
+//
+// A uniform emitter is first tested at seven points: its corners and edge midpoints (drawn
+// 1% toward the centroid, off the edges it shares with its surroundings) and its centroid.
+// Where all seven are seen, or all hidden, it is taken as wholly seen or wholly hidden and
+// the strata are not traced: most receivers see an emitter whole or not at all, and a shadow
+// edge crossing a triangle leaves test points on both sides of it. Only penumbrae, and
+// occluders small enough to hide between the seven points, take the n × n strata. Measured
+// on the Cycles quad box: the lightmap's direct error is the same as with every stratum
+// traced (2.16%), from 7 shadow rays instead of 16 per triangle where the light is unshadowed
+// (corners and centroid alone missed the corners of the blocks' shadows: 2.36%).
 VL_HOSTDEV inline vec3 emitterIrradiance(const TraceSceneView& s, const BvhView& bvh, uint32_t emitter, const vec3& p,
-                                         const vec3& ng, const vec3& ns, int strata, Pcg32& rng) {
+                                         const vec3& ng, const vec3& ns, int strata, uint64_t seed, uint64_t stream) {
     const vec3* v = s.vertices + 3 * static_cast<size_t>(emitter);
     const vec3 cross = glm::cross(v[1] - v[0], v[2] - v[0]);
     const float twiceArea = glm::length(cross);
@@ -68,13 +50,38 @@ VL_HOSTDEV inline vec3 emitterIrradiance(const TraceSceneView& s, const BvhView&
     vec3 clipped[4];
     const int clippedCount = clipToHemisphere(relative, 3, ns, clipped);
     if (clippedCount < 3) return vec3(0.0f);
+    const vec3 towardReceiver = facing > 0.0f ? emitterNormal : -emitterNormal;
+    const bool uniform = material.emissiveTexture.texture < 0;
+    const vec3 wholly = material.emission * polygonIrradiance(clipped, clippedCount, ns);
+
+    if (uniform) {
+        const vec3 centroid = (v[0] + v[1] + v[2]) * (1.0f / 3.0f);
+        const vec3 points[7] = {centroid,
+                                v[0] + 0.01f * (centroid - v[0]),
+                                v[1] + 0.01f * (centroid - v[1]),
+                                v[2] + 0.01f * (centroid - v[2]),
+                                0.5f * (v[0] + v[1]) + 0.01f * (centroid - 0.5f * (v[0] + v[1])),
+                                0.5f * (v[1] + v[2]) + 0.01f * (centroid - 0.5f * (v[1] + v[2])),
+                                0.5f * (v[2] + v[0]) + 0.01f * (centroid - 0.5f * (v[2] + v[0]))};
+        int seen = 0, hidden = 0;
+        for (const vec3& q : points) {
+            const vec3 wi = q - p;
+            if (!(glm::dot(ns, wi) > 0.0f && glm::dot(ng, wi) > 0.0f && -glm::dot(towardReceiver, wi) > 0.0f)) continue;
+            if (occluded(bvh, p, ng, q, towardReceiver))
+                ++hidden;
+            else
+                ++seen;
+        }
+        if (seen == 7) return wholly;
+        if (hidden == 7) return vec3(0.0f);
+    }
 
     // Stratified points: unshadowed contribution f_j and visibility V_j.
     const float pointArea = 0.5f * twiceArea / static_cast<float>(strata * strata);
-    const vec3 towardReceiver = facing > 0.0f ? emitterNormal : -emitterNormal;
     vec3 sampled(0.0f), sampledVisible(0.0f);
     for (int i = 0; i < strata; ++i)
         for (int j = 0; j < strata; ++j) {
+            Pcg32 rng = Pcg32::forItem(seed, stream * uint64_t(strata * strata) + uint64_t(i * strata + j), 0xD1EC7u);
             const vec2 u((static_cast<float>(i) + rng.next1D()) / static_cast<float>(strata),
                          (static_cast<float>(j) + rng.next1D()) / static_cast<float>(strata));
             const vec2 b = sampleUniformTriangle(u);
@@ -90,12 +97,12 @@ VL_HOSTDEV inline vec3 emitterIrradiance(const TraceSceneView& s, const BvhView&
             sampled += f;
             if (!occluded(bvh, p, ng, point.position, towardReceiver)) sampledVisible += f;
         }
-    if (material.emissiveTexture.texture >= 0) return sampledVisible;
+    if (!uniform) return sampledVisible;
 
     const float sampledSum = sampled.x + sampled.y + sampled.z;
     if (!(sampledSum > 0.0f)) return vec3(0.0f);  // no point above the horizon: a sliver at grazing angles
     const float visibleFraction = (sampledVisible.x + sampledVisible.y + sampledVisible.z) / sampledSum;
-    return material.emission * (polygonIrradiance(clipped, clippedCount, ns) * visibleFraction);
+    return wholly * visibleFraction;
 }
 
 // Direct irradiance E at a receiver sample (lights and emitters), deterministic per `seed`.
@@ -105,9 +112,8 @@ VL_HOSTDEV inline vec3 directIrradiance(const TraceSceneView& s, const BvhView& 
     vec3 ng = glm::normalize(glm::cross(v[1] - v[0], v[2] - v[0]));
     if (glm::dot(ng, r.normal) < 0.0f) ng = -ng;
     vec3 e = punctualIrradiance(s, bvh, r.position, ng, r.normal);
-    Pcg32 rng = Pcg32::forItem(seed, 0, 0xD1EC7u);
     for (uint32_t k = 0; k < s.emitterCount; ++k)
-        e += emitterIrradiance(s, bvh, s.emitters[k], r.position, ng, r.normal, settings.emitterStrata, rng);
+        e += emitterIrradiance(s, bvh, s.emitters[k], r.position, ng, r.normal, settings.emitterStrata, seed, k);
     return e;
 }
 

@@ -402,6 +402,7 @@ CameraReceivers buildCameraReceivers(const TraceScene& scene, const Bvh& bvh, co
     out.mask = Image(W, H, 1);
     std::vector<std::vector<SurfaceSample>> rows(static_cast<size_t>(H));
     std::vector<std::vector<uint32_t>> rowCounts(static_cast<size_t>(H));
+    std::vector<uint8_t> seesEmitter(static_cast<size_t>(W) * static_cast<size_t>(H), 0);
     const float weight = 1.0f / static_cast<float>(n * n);
     tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& range) {
         for (int y = range.begin(); y < range.end(); ++y) {
@@ -428,25 +429,12 @@ CameraReceivers buildCameraReceivers(const TraceScene& scene, const Bvh& bvh, co
                         s.triangle = hit.triangle;
                         s.weight = weight;
                         samples.push_back(s);
-                        emission += emissionAt(sv, h, -ray.direction) * weight;
+                        const vec3 emitted = emissionAt(sv, h, -ray.direction);
+                        if (maxComponent(emitted) > 0.0f) seesEmitter[size_t(y) * size_t(W) + size_t(x)] = 1;
+                        emission += emitted * weight;
                         albedo += s.albedo * weight;
                         ++hits;
                     }
-                if (emissionSubsamplesPerAxis > n) {
-                    // Emitters seen directly need only primary rays: sample their edges finer
-                    // than the shading grid (a 2 × 2 grid turns a pixel a quarter covered by
-                    // a bright emitter into 0 or a half).
-                    const int ne = emissionSubsamplesPerAxis;
-                    emission = vec3(0.0f);
-                    for (int j = 0; j < ne; ++j)
-                        for (int i = 0; i < ne; ++i) {
-                            const Ray ray = pinholeRay(camera, vec2(x + (i + 0.5f) / ne, y + (j + 0.5f) / ne));
-                            Hit hit;
-                            if (intersectClosest(bv, ray, hit))
-                                emission += emissionAt(sv, surfaceAt(sv, hit.triangle, hit.b1, hit.b2), -ray.direction);
-                        }
-                    emission /= static_cast<float>(ne * ne);
-                }
                 counts.push_back(hits);
                 out.emission.setRgb(x, y, emission);
                 out.albedo.setRgb(x, y, albedo);
@@ -454,6 +442,36 @@ CameraReceivers buildCameraReceivers(const TraceScene& scene, const Bvh& bvh, co
             }
         }
     });
+    if (emissionSubsamplesPerAxis > n) {
+        // Emitters seen directly need only primary rays: sample their edges finer than the
+        // shading grid (a 2 × 2 grid turns a pixel a quarter covered by a bright emitter into
+        // 0 or a half). Only where the shading grid saw an emitter in the pixel or a
+        // neighbour: an edge pixel whose own rays all missed the emitter has a neighbour
+        // whose rays did (an emitter narrower than the rays' spacing everywhere can still be
+        // missed), and elsewhere the finer grid found nothing to add.
+        const int ne = emissionSubsamplesPerAxis;
+        const auto nearEmitter = [&](int x, int y) {
+            for (int v = std::max(y - 1, 0); v <= std::min(y + 1, H - 1); ++v)
+                for (int u = std::max(x - 1, 0); u <= std::min(x + 1, W - 1); ++u)
+                    if (seesEmitter[size_t(v) * size_t(W) + size_t(u)]) return true;
+            return false;
+        };
+        tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& range) {
+            for (int y = range.begin(); y < range.end(); ++y)
+                for (int x = 0; x < W; ++x) {
+                    if (!nearEmitter(x, y)) continue;
+                    vec3 emission(0.0f);
+                    for (int j = 0; j < ne; ++j)
+                        for (int i = 0; i < ne; ++i) {
+                            const Ray ray = pinholeRay(camera, vec2(x + (i + 0.5f) / ne, y + (j + 0.5f) / ne));
+                            Hit hit;
+                            if (intersectClosest(bv, ray, hit))
+                                emission += emissionAt(sv, surfaceAt(sv, hit.triangle, hit.b1, hit.b2), -ray.direction);
+                        }
+                    out.emission.setRgb(x, y, emission / static_cast<float>(ne * ne));
+                }
+        });
+    }
     SurfaceSampleSet& set = out.receivers;
     set.width = W;
     set.height = H;

@@ -40,10 +40,15 @@ VL_HOSTDEV inline bool isBuried(const TraceSceneView& scene, const BvhView& bvh,
                 vec2((float(a) + 0.5f) / kBuriedProbesPerAxis, (float(b) + 0.5f) / kBuriedProbesPerAxis));
             ray.direction = d.x * tangent + d.y * bitangent + d.z * r.normal;
             Hit hit;
-            if (!intersectClosest(bvh, ray, hit)) continue;
-            const vec3* n = scene.normals + 3 * size_t(hit.triangle);
-            const vec3 normal = (1.0f - hit.b1 - hit.b2) * n[0] + hit.b1 * n[1] + hit.b2 * n[2];
-            if (glm::dot(normal, ray.direction) > 0.0f) ++fromBehind;
+            const int traced = a * kBuriedProbesPerAxis + b + 1;
+            if (intersectClosest(bvh, ray, hit)) {
+                const vec3* n = scene.normals + 3 * size_t(hit.triangle);
+                const vec3 normal = (1.0f - hit.b1 - hit.b2) * n[0] + hit.b1 * n[1] + hit.b2 * n[2];
+                if (glm::dot(normal, ray.direction) > 0.0f) ++fromBehind;
+            }
+            // The majority is decided once either side holds half the rays.
+            if (2 * fromBehind > kBuriedProbeRays) return true;
+            if (2 * (traced - fromBehind) >= kBuriedProbeRays) return false;
         }
     return 2 * fromBehind > kBuriedProbeRays;
 }

@@ -58,37 +58,49 @@ struct SideWeights {
 };
 
 SideWeights sideWeights(const VoxelScene& voxels, const IrradianceCacheView& cache) {
-    struct VoxelEntries {
-        uint32_t perSide[6] = {};
-        std::vector<std::pair<uint32_t, float>> entries;  // side by side
+    // Fixed chunks of voxels, each filling its own arrays, joined in chunk order: the same
+    // result at any thread count, and no allocation per voxel.
+    struct Chunk {
+        std::vector<uint32_t> perSlot;  // entries of each side slot of the chunk's voxels
+        std::vector<uint32_t> point;
+        std::vector<float> weight;
     };
-    std::vector<VoxelEntries> perVoxel(voxels.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, voxels.size()), [&](const tbb::blocked_range<size_t>& range) {
-        for (size_t i = range.begin(); i != range.end(); ++i) {
+    constexpr size_t kChunkVoxels = 2048;
+    const size_t chunks = (voxels.size() + kChunkVoxels - 1) / kChunkVoxels;
+    std::vector<Chunk> parts(chunks);
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+        Chunk& part = parts[c];
+        const size_t first = c * kChunkVoxels, last = std::min(voxels.size(), first + kChunkVoxels);
+        part.perSlot.assign((last - first) * 6, 0);
+        for (size_t i = first; i < last; ++i) {
             const VoxelSides sides = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
-            VoxelEntries& v = perVoxel[i];
             for (int s = 0; s < sides.count; ++s) {
-                const size_t first = v.entries.size();
-                const float total = visitCachePoints(cache, voxels.centre(i), sides.normal[s],
-                                                     [&](uint32_t q, float w) { v.entries.emplace_back(q, w); });
-                for (size_t k = first; k < v.entries.size(); ++k) v.entries[k].second /= total;
-                v.perSide[s] = static_cast<uint32_t>(v.entries.size() - first);
+                const size_t begin = part.point.size();
+                const float total = visitCachePoints(cache, voxels.centre(i), sides.normal[s], [&](uint32_t q, float w) {
+                    part.point.push_back(q);
+                    part.weight.push_back(w);
+                });
+                for (size_t k = begin; k < part.weight.size(); ++k) part.weight[k] /= total;
+                part.perSlot[(i - first) * 6 + size_t(s)] = static_cast<uint32_t>(part.point.size() - begin);
             }
         }
     });
     SideWeights out;
     out.begin.assign(voxels.size() * 6 + 1, 0);
+    size_t slot = 0;
+    for (const Chunk& part : parts) {
+        out.point.insert(out.point.end(), part.point.begin(), part.point.end());
+        out.weight.insert(out.weight.end(), part.weight.begin(), part.weight.end());
+        for (uint32_t count : part.perSlot) {
+            out.begin[slot + 1] = out.begin[slot] + count;
+            ++slot;
+        }
+    }
     for (size_t i = 0; i < voxels.size(); ++i) {
-        for (const auto& [point, weight] : perVoxel[i].entries) {
-            out.point.push_back(point);
-            out.weight.push_back(weight);
-        }
         const int sideCount = voxelSides(voxels.normal[i], voxels.axisWeights[i].data()).count;
-        for (int s = 0; s < 6; ++s) {
-            const size_t slot = i * 6 + size_t(s);
-            out.begin[slot + 1] = out.begin[slot] + perVoxel[i].perSide[s];
-            if (s < sideCount && perVoxel[i].perSide[s] == 0) out.selfGathered.push_back(static_cast<uint32_t>(slot));
-        }
+        for (int s = 0; s < sideCount; ++s)
+            if (out.begin[i * 6 + size_t(s) + 1] == out.begin[i * 6 + size_t(s)])
+                out.selfGathered.push_back(static_cast<uint32_t>(i * 6 + size_t(s)));
     }
     return out;
 }

@@ -10,9 +10,14 @@ namespace vl {
 
 namespace {
 
-// 1024² quadrature points: each weight is then accurate to ~1e-4 (cell boundaries cut
-// through ~1000 of the 10⁶ points) and building all three sets takes a few tens of ms.
-constexpr int kQuadratureResolution = 1024;
+// The weights of each ring's cones (all equal: the cones of a ring are rotations of one
+// another), from cosineCellWeights at 1024² points averaged over each ring: accurate to
+// ~1e-4 (cell boundaries cut through ~1000 of the 10⁶ points). Tabulated because the
+// quadrature took ~40 ms at every start of the tool; tests/cone/cone_set_test.cpp recomputes
+// them.
+constexpr float kRingWeights6[] = {0.321405411f, 0.135718912f};
+constexpr float kRingWeights16[] = {0.135944366f, 0.0936838761f, 0.0335502625f};
+constexpr float kRingWeights32[] = {0.0750255585f, 0.0537967682f, 0.035118971f, 0.012468338f};
 
 std::vector<int> ringCounts(int count) {
     switch (count) {
@@ -27,16 +32,10 @@ std::vector<int> ringCounts(int count) {
 ConeSet makeConeSet(int count) {
     ConeSet set;
     const std::vector<vec3> directions = coneDirections(count);
-    std::vector<float> weights = cosineCellWeights(directions, kQuadratureResolution);
-    // The cones of a ring are rotations of one another, so their exact weights are equal;
-    // the quadrature grid's φ spacing does not share the rings' symmetry, so average them.
-    size_t first = 0;
-    for (int n : ringCounts(count)) {
-        double sum = 0.0;
-        for (size_t k = first; k < first + size_t(n); ++k) sum += weights[k];
-        for (size_t k = first; k < first + size_t(n); ++k) weights[k] = static_cast<float>(sum / n);
-        first += size_t(n);
-    }
+    const float* ringWeights = count == 6 ? kRingWeights6 : count == 16 ? kRingWeights16 : kRingWeights32;
+    std::vector<float> weights;
+    const std::vector<int> rings = ringCounts(count);
+    for (size_t r = 0; r < rings.size(); ++r) weights.insert(weights.end(), size_t(rings[r]), ringWeights[r]);
     set.count = count;
     set.defaultHalfAngle = static_cast<float>(std::acos(1.0 - 1.0 / count));
     for (int k = 0; k < count; ++k) {

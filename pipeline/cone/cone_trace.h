@@ -78,7 +78,7 @@ VL_HOSTDEV inline void viewFaces(const vec3& u, int (&faces)[3], float (&weights
     for (int a = 0; a < 3; ++a) weights[a] = sum > 0.0f ? weights[a] / sum : 1.0f / 3.0f;
 }
 
-VL_HOSTDEV inline MipSample sampleMipLevel(const MipLevelView& level, MipLeafCache& leaves, const vec3& x,
+VL_HOSTDEV inline MipSample sampleMipLevel(const MipLevelView& level, IndexLeafCache& leaves, const vec3& x,
                                            const vec3& dir, const vec3* viewpoint = nullptr) {
     constexpr float kIndexLimit = 1.0e9f;  // keeps the int conversion defined far outside
     MipSample sum;
@@ -89,7 +89,7 @@ VL_HOSTDEV inline MipSample sampleMipLevel(const MipLevelView& level, MipLeafCac
     const ivec3 i0(base);
     // The eight corners' texel indices; where they share a leaf (7 samples in 8 with
     // 8³ leaves), one leaf lookup serves all of them.
-    using Leaf = MipLeafCache::Leaf;
+    using Leaf = IndexLeafCache::Leaf;
     int32_t indices[8];
     constexpr int kLast = int(Leaf::MASK);
     if ((i0.x & kLast) != kLast && (i0.y & kLast) != kLast && (i0.z & kLast) != kLast) {
@@ -134,7 +134,7 @@ VL_HOSTDEV inline MipSample sampleMipLevel(const MipLevelView& level, MipLeafCac
 
 VL_HOSTDEV inline MipSample sampleMipLevel(const MipLevelView& level, const vec3& x, const vec3& dir,
                                            const vec3* viewpoint = nullptr) {
-    MipLeafCache leaves;
+    IndexLeafCache leaves;
     return sampleMipLevel(level, leaves, x, dir, viewpoint);
 }
 
@@ -146,9 +146,9 @@ VL_HOSTDEV inline MipSample sampleMipLevel(const MipLevelView& level, const vec3
 // centre, 1 − exp(−σ·s/v) = 1 − (1 − α)^(s/v): the step-length correction.
 // Correcting each level before blending keeps a uniform medium exact at any λ.
 // `apex`, when given, is the viewer every voxel is seen from (sampleMipLevel).
-// `leaves`, when given, holds one MipLeafCache per level that persists along a cone.
+// `leaves`, when given, holds one IndexLeafCache per level that persists along a cone.
 VL_HOSTDEV inline vec4 coneSegment(const MipView& mips, const vec3& p, const vec3& dir, float level,
-                                   float stepLength, const vec3* apex = nullptr, MipLeafCache* leaves = nullptr) {
+                                   float stepLength, const vec3* apex = nullptr, IndexLeafCache* leaves = nullptr) {
     if (mips.levelCount <= 0) return vec4(0.0f);
     level = glm::clamp(level, 0.0f, float(mips.levelCount - 1));
     const int lower = static_cast<int>(level);
@@ -159,7 +159,7 @@ VL_HOSTDEV inline vec4 coneSegment(const MipView& mips, const vec3& p, const vec
         if (weight <= 0.0f) continue;
         const MipLevelView& view = mips.levels[l];
         const vec3 viewpoint = apex ? *apex * view.inverseVoxelSize - vec3(view.centreOffset) : vec3(0.0f);
-        MipLeafCache local;
+        IndexLeafCache local;
         const MipSample s = sampleMipLevel(view, leaves ? leaves[l] : local, p * view.inverseVoxelSize - vec3(view.centreOffset),
                                            dir, apex ? &viewpoint : nullptr);
         if (!(s.alpha > 0.0f)) continue;
@@ -216,7 +216,7 @@ VL_HOSTDEV inline ConeResult traceCone(const MipView& mips, const vec3& apex, co
     const float coarsestVoxel = mips.levels[mips.levelCount - 1].voxelSize;
     stepFactor = glm::max(stepFactor, 1.0e-3f);  // guarantees progress whatever the caller passes
     const float tEnd = maxDistance > 0.0f ? maxDistance : kInfinity;
-    MipLeafCache leaves[MipView::kMaxLevels];
+    IndexLeafCache leaves[MipView::kMaxLevels];
     // Samples farther than a coarsest voxel and a half from the bounds read only zeros.
     float t = glm::max(0.0f, tIn - 1.5f * coarsestVoxel);
     while (t < tEnd && result.occlusion < kOpaque) {

@@ -96,24 +96,25 @@ VL_HOSTDEV inline vec3 liftOffSurface(const vec3& p, const vec3& n, float h) {
 }
 
 // Whether the segment a → b (world) crosses no voxel of `occupancy` with α ≥ ½ (a solid
-// wall), sampled every half voxel: a segment crossing a wall one voxel thick travels at
-// least a voxel along its axis, so a sample lands inside it.
+// wall) besides the voxels holding its ends, sampled at most a voxel apart: consecutive
+// samples then differ by at most a voxel along every axis, so none jumps over a layer of
+// voxels one thick (a wall).
 VL_HOSTDEV inline bool clearPath(const MipLevelView& occupancy, float h, const vec3& a, const vec3& b) {
     if (!occupancy.index) return true;
     const vec3 from = a / h, to = b / h;
     const float length = glm::length(to - from);
-    const int steps = static_cast<int>(glm::ceil(2.0f * length));
-    auto accessor = occupancy.index->getAccessor();
+    const int steps = static_cast<int>(glm::ceil(length));
     const auto voxelAt = [](const vec3& x) {
         return nanovdb::Coord(int(glm::floor(x.x + 0.5f)), int(glm::floor(x.y + 0.5f)), int(glm::floor(x.z + 0.5f)));
     };
     const nanovdb::Coord first = voxelAt(from), final = voxelAt(to);
     nanovdb::Coord last = first;
+    IndexLeafCache leaves;
     for (int k = 1; k < steps; ++k) {
         const nanovdb::Coord voxel = voxelAt(from + (to - from) * (float(k) / float(steps)));
         if (voxel == last || voxel == first || voxel == final) continue;
         last = voxel;
-        const int32_t index = accessor.getValue(voxel);
+        const int32_t index = leaves.value(*occupancy.index, voxel);
         if (index >= 0 && occupancy.texels[size_t(index) * size_t(occupancy.facesPerVoxel)].alpha >= 0.5f) return false;
     }
     return true;
@@ -133,13 +134,13 @@ VL_HOSTDEV inline float visitCachePoints(const IrradianceCacheView& cache, const
         return 0.0f;
     const ivec3 centre(cellOf(int(voxel.x), cache.level), cellOf(int(voxel.y), cache.level),
                        cellOf(int(voxel.z), cache.level));
-    auto accessor = cache.cells->getAccessor();
+    IndexLeafCache cells;
     const vec3 lifted = liftOffSurface(p, n, h);
     float total = 0.0f;
     for (int dz = -1; dz <= 1; ++dz)
         for (int dy = -1; dy <= 1; ++dy)
             for (int dx = -1; dx <= 1; ++dx) {
-                const int32_t slot = accessor.getValue(nanovdb::Coord(centre.x + dx, centre.y + dy, centre.z + dz));
+                const int32_t slot = cells.value(*cache.cells, nanovdb::Coord(centre.x + dx, centre.y + dy, centre.z + dz));
                 if (slot < 0) continue;
                 for (uint32_t q = cache.cellBegin[slot]; q < cache.cellBegin[slot + 1]; ++q) {
                     const GatherPoint& point = cache.points[q];

@@ -86,10 +86,11 @@ struct MipLevelView {
     float centreOffset = 0.0f;      // (1 − 2^−k)/2
 };
 
-// The leaf of one mip level's index grid that the last lookup landed in: consecutive cone
-// samples and the eight corners of a trilinear sample mostly share a leaf. Also remembers
-// where there is no leaf (the index grid has no active tiles, so every voxel there is −1).
-struct MipLeafCache {
+// The leaf of an index grid (a mip level's, the gather cells') that the last lookup landed
+// in: consecutive cone samples and the eight corners of a trilinear sample mostly share a
+// leaf. Also remembers where there is no leaf (index grids have no active tiles, so every
+// voxel there is −1).
+struct IndexLeafCache {
     using Leaf = nanovdb::NanoLeaf<int32_t>;
     const Leaf* leaf = nullptr;
     nanovdb::Coord origin = nanovdb::Coord::max();

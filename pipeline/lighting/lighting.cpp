@@ -175,6 +175,8 @@ Emitters emitterSamples(const Scene& scene, int strata, float h) {
             tri.v1 = p1 / h;
             tri.v2 = p2 / h;
             tri.normal = cross / doubleArea;
+            tri.uniform = material.emissiveTexture.valid() ? 0 : 1;
+            tri.radiance = material.emission();
             tri.doubleSided = material.doubleSided ? 1 : 0;
             tri.firstSample = static_cast<uint32_t>(emitters.samples.size());
             const float sampleArea = 0.5f * doubleArea * share;

@@ -51,8 +51,13 @@ struct LightingSettings {
     // every point and spot light. A light named in `lightAttenuation` uses its own K's.
     std::optional<AttenuationCoefficients> attenuation;
     std::map<std::string, AttenuationCoefficients> lightAttenuation;
-    // Each emissive triangle is sampled at n×n stratified points (fixed jitter per triangle).
-    int emitterStrata = 3;
+    // Each emissive triangle's visibility is sampled at n×n stratified points (fixed jitter per
+    // triangle); its unshadowed light is exact (Lambert's polygon formula), so the points only
+    // shape penumbrae. One suffices by default: the voxel light feeds only the bounces (the
+    // receivers' direct light is traced exactly), whose gather blurs penumbrae anyway. On the
+    // Cycles quad box n = 1, 2, 3 give lightmap 6.07%, 6.16%, 6.24% relative RMSE and take
+    // 0.12, 0.39, 0.83 s (2 cores).
+    int emitterStrata = 1;
     // false: V = 0 everywhere (unshadowed lighting; the benchmark's "no stepping" peer).
     bool visibility = true;
     // Worker threads; 0 = TBB's default. Results do not depend on it.

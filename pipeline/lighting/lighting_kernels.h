@@ -37,6 +37,7 @@
 
 #include "core/hostdev.h"
 #include "core/math.h"
+#include "core/polygon_irradiance.h"
 #include "voxel/voxel_scene.h"
 
 #include <nanovdb/NanoVDB.h>
@@ -71,6 +72,8 @@ struct KernelLight {
 struct EmitterTriangle {
     vec3 v0{0.0f}, v1{0.0f}, v2{0.0f};  // index space
     vec3 normal{0.0f, 0.0f, 1.0f};      // unit, front face (counter-clockwise)
+    vec3 radiance{0.0f};                // Le where `uniform`
+    int uniform = 1;                    // 0: textured emission, sampled only
     int doubleSided = 0;
     uint32_t firstSample = 0;
     uint32_t sampleCount = 0;
@@ -189,6 +192,35 @@ VL_HOSTDEV inline bool sideSees(int mode, const vec3& side, const float* faces, 
         if (((inSide >> f) & 1u) && faces[f] > 0.0f && sign * d[f >> 1] > 0.0f) return true;
     }
     return false;
+}
+
+// Unshadowed irradiance per unit radiance that a side receives from a triangle (vertices
+// relative to the receiver): the side's weight integrated over the triangle's solid angle,
+// in closed form (Lambert's polygon formula, core/polygon_irradiance.h). Each weighting is a
+// sum of clamped cosines: lambert max(n_s·ω, 0); villegas Σ_a n_s,a²·max(±e_a·ω, 0); six-axis
+// Σ_f w_f·max(d_f·ω, 0) / Σ_f w_f; and ∫ max(d·ω, 0) dω over the triangle is its irradiance
+// on a plane of normal d.
+VL_HOSTDEV inline float sideTriangleIrradiance(int mode, const vec3& side, const float* faces, unsigned inSide,
+                                               const vec3 (&relative)[3]) {
+    if (mode == kWeightLambert) return clippedTriangleIrradiance(relative, side);
+    float sum = 0.0f, total = 0.0f;
+    for (int f = 0; f < 6; ++f) {
+        const int axis = f >> 1;
+        const float sign = (f & 1) ? -1.0f : 1.0f;
+        float weight;
+        if (mode == kWeightVillegas) {
+            weight = side[axis] * sign > 0.0f ? side[axis] * side[axis] : 0.0f;
+        } else {
+            weight = ((inSide >> f) & 1u) ? faces[f] : 0.0f;
+            total += weight;
+        }
+        if (!(weight > 0.0f)) continue;
+        vec3 d(0.0f);
+        d[axis] = sign;
+        sum += weight * clippedTriangleIrradiance(relative, d);
+    }
+    if (mode == kWeightVillegas) return sum;
+    return total > 0.0f ? sum / total : 0.0f;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -461,6 +493,9 @@ VL_HOSTDEV inline VoxelLighting shadeVoxel(const LightingView& view, IndexAccess
         const float emitterLayer = 0.5f * normL1(tri.normal);
         float triangleLoss = 0.0f;
         uint32_t samplesReaching = 0;
+        // Per side: the samples' unshadowed and visible sums (the ratio estimator's weights).
+        float unshadowed[6] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+        vec3 visible[6] = {vec3(0.0f), vec3(0.0f), vec3(0.0f), vec3(0.0f), vec3(0.0f), vec3(0.0f)};
         for (uint32_t k = 0; k < tri.sampleCount; ++k) {
             const EmitterSample& sample = view.emitterSamples[tri.firstSample + k];
             const vec3 toSample = sample.position - receiver;
@@ -486,7 +521,9 @@ VL_HOSTDEV inline VoxelLighting shadeVoxel(const LightingView& view, IndexAccess
                     V = visibilityLoss<Hierarchical>(view, accessor, receiver, w.litNormal, L, sample.position, false,
                                                      end, stats.steps);
                 }
-                irradiance[s] += E * (w.cosine * (1.0f - V));
+                const vec3 e = E * w.cosine;
+                unshadowed[s] += e.x + e.y + e.z;
+                visible[s] += e * (1.0f - V);
                 loss += V;
                 ++sidesLit;
             }
@@ -494,6 +531,21 @@ VL_HOSTDEV inline VoxelLighting shadeVoxel(const LightingView& view, IndexAccess
             ++stats.evaluations;
             triangleLoss += loss / static_cast<float>(sidesLit);
             ++samplesReaching;
+        }
+        // A uniform emitter: its exact unshadowed irradiance times the fraction of the
+        // samples' contribution that arrives unshadowed. Fully lit or fully shadowed sides
+        // are then exact; only penumbrae carry the samples' error (bake/direct_light.h does
+        // the same at the receivers). A textured emitter keeps the plain stratified sum.
+        const vec3 relative[3] = {tri.v0 - receiver, tri.v1 - receiver, tri.v2 - receiver};
+        for (int s = 0; s < sides.count; ++s) {
+            if (!tri.uniform) {
+                irradiance[s] += visible[s];
+                continue;
+            }
+            if (!(unshadowed[s] > 0.0f)) continue;  // no sample above the side's horizon: a grazing sliver
+            const float visibleFraction = (visible[s].x + visible[s].y + visible[s].z) / unshadowed[s];
+            irradiance[s] += tri.radiance *
+                             (sideTriangleIrradiance(mode, sides.normal[s], faces, inSide[s], relative) * visibleFraction);
         }
         if (samplesReaching > 0) {
             occlusionSum += triangleLoss / static_cast<float>(samplesReaching);

@@ -6,6 +6,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <map>
+
 #include <cmath>
 
 using namespace vl;
@@ -71,6 +73,26 @@ TEST_CASE("cone weights are the cosine-weighted measure of each cone's cell", "[
         CHECK(std::abs(mean.x) < 1e-4f);
         CHECK(std::abs(mean.y) < 1e-4f);
         CHECK(mean.z == Approx(2.0 / 3.0).epsilon(count == 6 ? 0.1 : 0.04));
+    }
+}
+
+TEST_CASE("the tabulated cone weights are the quadrature's, averaged over each ring", "[cone]") {
+    // A ring's cones are rotations of one another, so their exact weights are equal; the
+    // quadrature grid's φ spacing does not share the rings' symmetry, so its per-cone values
+    // differ slightly and their ring mean is what coneSet tabulates.
+    const std::map<int, std::vector<int>> rings = {{6, {1, 5}}, {16, {1, 6, 9}}, {32, {1, 7, 11, 13}}};
+    for (const auto& [count, ringCounts] : rings) {
+        INFO(count << " cones");
+        const std::vector<float> quadrature = cosineCellWeights(coneDirections(count), 1024);
+        const ConeSet& set = coneSet(count);
+        size_t first = 0;
+        for (int n : ringCounts) {
+            double sum = 0.0;
+            for (size_t k = first; k < first + size_t(n); ++k) sum += quadrature[k];
+            for (size_t k = first; k < first + size_t(n); ++k) CHECK(set.weights[k] == Approx(sum / n).epsilon(1e-6));
+            first += size_t(n);
+        }
+        CHECK(first == size_t(count));
     }
 }
 
