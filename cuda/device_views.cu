@@ -51,6 +51,8 @@ IrradianceCacheView uploadCache(DeviceBuffers& owner, const IrradianceCacheView&
     d.cellBegin = upload(owner, host.cellBegin, cacheCellSlotCount(host) + 1);
     d.points = upload(owner, host.points, host.pointCount);
     d.irradiance = upload(owner, host.irradiance, host.pointCount);
+    d.neighbourBegin = upload(owner, host.neighbourBegin, host.neighbourBegin ? host.pointCount + 1 : 0);
+    d.neighbours = upload(owner, host.neighbours, host.neighbourBegin ? host.neighbourBegin[host.pointCount] : 0);
     return d;
 }
 

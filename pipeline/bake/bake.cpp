@@ -151,6 +151,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& d
     if (settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images)) {
         timed(result.stages, "gather", [&] {
             cache = IrradianceCache(result.voxels, settings.gatherLevel);
+            cache.link(mipView);
             Progress progress("gather", cache.points().size(), settings.quiet);
             if (onGpu)
                 cache.setIrradiance(
@@ -195,7 +196,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& d
             for (const Camera& camera : cameras) {
                 const CameraModel model = makeCameraModel(camera, settings.imageWidth, settings.imageHeight);
                 const CameraReceivers receivers = buildCameraReceivers(traceScene, bvh, model, settings.imageSubsamples,
-                                                                       kEmissionSubsamples);
+                                                                       kEmissionSubsamples, true);
                 Progress progress("image", receivers.receivers.elementCount(), settings.quiet);
                 const ReceiverLighting lit =
                     shade(receivers.receivers, sceneView, bvhView, mipView, gathered, false, progress);

@@ -390,7 +390,7 @@ std::vector<LightmapAtlas> buildLightmapReceivers(const Scene& scene, const Ligh
 }
 
 CameraReceivers buildCameraReceivers(const TraceScene& scene, const Bvh& bvh, const CameraModel& camera,
-                                     int subsamplesPerAxis, int emissionSubsamplesPerAxis) {
+                                     int subsamplesPerAxis, int emissionSubsamplesPerAxis, bool samplePerTriangle) {
     if (subsamplesPerAxis < 1 || subsamplesPerAxis > 16)
         throw SettingsError("camera-subsamples: " + std::to_string(subsamplesPerAxis) + " is outside 1..16");
     const int W = camera.width, H = camera.height, n = subsamplesPerAxis;
@@ -410,7 +410,7 @@ CameraReceivers buildCameraReceivers(const TraceScene& scene, const Bvh& bvh, co
             auto& counts = rowCounts[static_cast<size_t>(y)];
             for (int x = 0; x < W; ++x) {
                 vec3 emission(0.0f), albedo(0.0f);
-                uint32_t hits = 0;
+                uint32_t hits = 0, pixelSamples = 0;
                 for (int j = 0; j < n; ++j)
                     for (int i = 0; i < n; ++i) {
                         const vec2 film(x + (i + 0.5f) / n, y + (j + 0.5f) / n);
@@ -428,14 +428,32 @@ CameraReceivers buildCameraReceivers(const TraceScene& scene, const Bvh& bvh, co
                         s.albedo = baseColorAt(sv, h);
                         s.triangle = hit.triangle;
                         s.weight = weight;
-                        samples.push_back(s);
+                        // One sample per triangle the pixel sees: its rays' hits merged.
+                        bool merged = false;
+                        if (samplePerTriangle)
+                            for (size_t k = samples.size() - pixelSamples; k < samples.size() && !merged; ++k)
+                                if (samples[k].triangle == s.triangle) {
+                                    SurfaceSample& m = samples[k];
+                                    const float total = m.weight + s.weight;
+                                    m.position = (m.weight * m.position + s.weight * s.position) / total;
+                                    m.normal += s.normal;
+                                    m.albedo = (m.weight * m.albedo + s.weight * s.albedo) / total;
+                                    m.weight = total;
+                                    merged = true;
+                                }
+                        if (!merged) {
+                            samples.push_back(s);
+                            ++pixelSamples;
+                        }
                         const vec3 emitted = emissionAt(sv, h, -ray.direction);
                         if (maxComponent(emitted) > 0.0f) seesEmitter[size_t(y) * size_t(W) + size_t(x)] = 1;
                         emission += emitted * weight;
                         albedo += s.albedo * weight;
                         ++hits;
                     }
-                counts.push_back(hits);
+                for (size_t k = samples.size() - pixelSamples; k < samples.size(); ++k)
+                    samples[k].normal = glm::normalize(samples[k].normal);
+                counts.push_back(pixelSamples);
                 out.emission.setRgb(x, y, emission);
                 out.albedo.setRgb(x, y, albedo);
                 out.mask.at(x, y) = static_cast<float>(hits) * weight;

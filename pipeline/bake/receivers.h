@@ -93,7 +93,12 @@ struct CameraReceivers {
 
 // emissionSubsamplesPerAxis > subsamplesPerAxis samples the directly seen emission on that
 // finer grid (primary rays only); otherwise emission uses the shading grid.
+// samplePerTriangle: the rays of a pixel that hit the same triangle make one sample at their
+// hits' centroid (normal and albedo their means, weight their share), as a lightmap texel
+// keeps one sample per triangle: the n × n rays still find the pixel's edges, but a pixel
+// inside one surface is shaded once.
 CameraReceivers buildCameraReceivers(const TraceScene& scene, const Bvh& bvh, const CameraModel& camera,
-                                     int subsamplesPerAxis = 1, int emissionSubsamplesPerAxis = 0);
+                                     int subsamplesPerAxis = 1, int emissionSubsamplesPerAxis = 0,
+                                     bool samplePerTriangle = false);
 
 }  // namespace vl

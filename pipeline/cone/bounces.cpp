@@ -122,6 +122,7 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
     std::vector<FaceRadiance> current = lit;
     std::vector<FaceRadiance> next(voxels.size());
     RadianceMips mips = buildRadianceMips(voxels, isotropic(voxels, current), current);
+    cache.link(mips.view());
     const SideWeights weights = sideWeights(voxels, cache.view(mips.view()));
     std::vector<vec3> selfIrradiance(weights.selfGathered.size());
     for (int b = 0; b < bounces; ++b) {

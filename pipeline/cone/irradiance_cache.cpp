@@ -75,6 +75,7 @@ IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level) : level_(l
         if (begin == 0 || cell != sides[begin - 1].cell) {
             accessor.setValue(nanovdb::Coord(cell.x, cell.y, cell.z), static_cast<int32_t>(cellBegin_.size()));
             cellBegin_.push_back(static_cast<uint32_t>(points_.size()));
+            cellCoords_.push_back(cell);
         }
         GatherPoint point;
         point.position = vec3(position / double(end - begin));
@@ -102,6 +103,40 @@ void IrradianceCache::gather(const MipView& mips, const ConeSettings& settings, 
     });
 }
 
+void IrradianceCache::link(const MipView& mips) {
+    const float h = static_cast<float>(voxelSize_);
+    const MipLevelView occupancy = mips.levelCount > 0 ? mips.levels[0] : MipLevelView{};
+    std::vector<std::vector<uint32_t>> perPoint(points_.size());
+    const CellIndexGrid* grid = points_.empty() ? nullptr : cellGrid();
+    tbb::parallel_for(size_t(0), cellCoords_.size(), [&](size_t slot) {
+        IndexLeafCache cells;
+        const ivec3 cell = cellCoords_[slot];
+        for (uint32_t q = cellBegin_[slot]; q < cellBegin_[slot + 1]; ++q) {
+            const GatherPoint& from = points_[q];
+            const vec3 lifted = liftOffSurface(from.position, from.normal, h);
+            for (int dz = -1; dz <= 1; ++dz)
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        const int32_t other = cells.value(*grid, nanovdb::Coord(cell.x + dx, cell.y + dy, cell.z + dz));
+                        if (other < 0) continue;
+                        for (uint32_t r = cellBegin_[size_t(other)]; r < cellBegin_[size_t(other) + 1]; ++r) {
+                            const GatherPoint& to = points_[r];
+                            if (!(glm::dot(from.normal, to.normal) > 0.0f)) continue;
+                            if (r != q && !clearPath(occupancy, h, lifted, liftOffSurface(to.position, to.normal, h)))
+                                continue;
+                            perPoint[q].push_back(r);
+                        }
+                    }
+        }
+    });
+    neighbourBegin_.assign(points_.size() + 1, 0);
+    neighbours_.clear();
+    for (size_t q = 0; q < points_.size(); ++q) {
+        neighbours_.insert(neighbours_.end(), perPoint[q].begin(), perPoint[q].end());
+        neighbourBegin_[q + 1] = static_cast<uint32_t>(neighbours_.size());
+    }
+}
+
 void IrradianceCache::setIrradiance(std::vector<vec3> irradiance) {
     if (irradiance.size() != points_.size())
         throw Error("IrradianceCache: " + std::to_string(irradiance.size()) + " irradiance values for " +
@@ -116,6 +151,8 @@ IrradianceCacheView IrradianceCache::view(const MipView& mips) const {
     view.cellBegin = cellBegin_.data();
     view.points = points_.data();
     view.irradiance = irradiance_.data();
+    view.neighbourBegin = neighbourBegin_.empty() ? nullptr : neighbourBegin_.data();
+    view.neighbours = neighbours_.data();
     view.pointCount = static_cast<uint32_t>(points_.size());
     view.voxelSize = static_cast<float>(voxelSize_);
     view.level = level_;
@@ -123,7 +160,8 @@ IrradianceCacheView IrradianceCache::view(const MipView& mips) const {
 }
 
 size_t IrradianceCache::memoryBytes() const {
-    return cells_.size() + cellBegin_.size() * sizeof(uint32_t) + points_.size() * (sizeof(GatherPoint) + sizeof(vec3));
+    return cells_.size() + cellBegin_.size() * sizeof(uint32_t) + points_.size() * (sizeof(GatherPoint) + sizeof(vec3)) +
+           cellCoords_.size() * sizeof(ivec3) + (neighbourBegin_.size() + neighbours_.size()) * sizeof(uint32_t);
 }
 
 }  // namespace vl

@@ -71,6 +71,10 @@ struct IrradianceCacheView {
     const uint32_t* cellBegin = nullptr;   // points of slot s: [cellBegin[s], cellBegin[s + 1])
     const GatherPoint* points = nullptr;
     const vec3* irradiance = nullptr;      // E per point (W/m²)
+    // Points a point's receivers may take (IrradianceCache::link): of point q,
+    // neighbours[neighbourBegin[q] … neighbourBegin[q + 1]); null before linking.
+    const uint32_t* neighbourBegin = nullptr;
+    const uint32_t* neighbours = nullptr;
     uint32_t pointCount = 0;
     float voxelSize = 0.0f;  // h
     int level = 0;           // L
@@ -120,14 +124,29 @@ VL_HOSTDEV inline bool clearPath(const MipLevelView& occupancy, float h, const v
     return true;
 }
 
-// Calls visit(point index, weight) for every point with weight > 0 at (p, n); returns the
-// weights' sum (0: no point applies).
+// The interpolation weight of gather point q at surface point p with unit normal n (see
+// above), visibility aside; 0 where q does not apply.
+VL_HOSTDEV inline float cacheWeight(const GatherPoint& q, const vec3& p, const vec3& n, float inverseCell) {
+    const float facing = glm::dot(n, q.normal);
+    if (!(facing > 0.0f)) return 0.0f;
+    const vec3 d = p - q.position;
+    float w = facing * glm::max(0.0f, 1.0f - glm::abs(glm::dot(d, q.normal)) * inverseCell);
+    for (int a = 0; a < 3; ++a) w *= glm::max(0.0f, 1.0f - glm::abs(d[a]) * inverseCell);
+    return w;
+}
+
+// Calls visit(point index, weight) for every point with weight > 0 at (p, n) that p sees;
+// returns the weights' sum (0: no point applies). Visibility is tested once per receiver:
+// its home point is the heaviest point of its own cell (else of the cells around) with a
+// clear path from p, and the points it takes are the home's neighbours (linked by
+// IrradianceCache::link, which tested their paths from the home). A wall between p and a
+// point a cell away nearly always stands between the home and that point too, and one test
+// per receiver instead of one per point made the bounces' weights 4 times cheaper.
 template <typename Visit>
 VL_HOSTDEV inline float visitCachePoints(const IrradianceCacheView& cache, const vec3& p, const vec3& n, Visit&& visit) {
-    if (!cache.cells || cache.pointCount == 0) return 0.0f;
+    if (!cache.cells || cache.pointCount == 0 || !cache.neighbourBegin) return 0.0f;
     const float h = cache.voxelSize;
-    const float cell = ldexpf(h, cache.level);
-    const float inverseCell = 1.0f / cell;
+    const float inverseCell = 1.0f / ldexpf(h, cache.level);
     const vec3 voxel = glm::floor(p / h + vec3(0.5f));
     constexpr float kIndexLimit = 1.0e9f;
     if (!(glm::abs(voxel.x) < kIndexLimit && glm::abs(voxel.y) < kIndexLimit && glm::abs(voxel.z) < kIndexLimit))
@@ -136,25 +155,52 @@ VL_HOSTDEV inline float visitCachePoints(const IrradianceCacheView& cache, const
                        cellOf(int(voxel.z), cache.level));
     IndexLeafCache cells;
     const vec3 lifted = liftOffSurface(p, n, h);
-    float total = 0.0f;
-    for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) {
-                const int32_t slot = cells.value(*cache.cells, nanovdb::Coord(centre.x + dx, centre.y + dy, centre.z + dz));
-                if (slot < 0) continue;
-                for (uint32_t q = cache.cellBegin[slot]; q < cache.cellBegin[slot + 1]; ++q) {
-                    const GatherPoint& point = cache.points[q];
-                    const vec3 d = p - point.position;
-                    const float facing = glm::dot(n, point.normal);
-                    if (!(facing > 0.0f)) continue;
-                    float w = facing * glm::max(0.0f, 1.0f - glm::abs(glm::dot(d, point.normal)) * inverseCell);
-                    for (int a = 0; a < 3; ++a) w *= glm::max(0.0f, 1.0f - glm::abs(d[a]) * inverseCell);
-                    if (!(w > 0.0f)) continue;
-                    if (!clearPath(cache.occupancy, h, lifted, liftOffSurface(point.position, point.normal, h))) continue;
-                    visit(q, w);
-                    total += w;
+    // The home: own cell first (ring 0), then the cells around (ring 1); within a ring the
+    // heaviest points first (ties: the lower index), each tried until one is seen, at most
+    // kHomeTries paths in all.
+    constexpr int kHomeTries = 4;
+    constexpr int kMaxCandidates = 64;
+    uint32_t candidate[kMaxCandidates];
+    float weight[kMaxCandidates];
+    uint32_t home = ~0u;
+    int tries = 0;
+    for (int ring = 0; ring <= 1 && home == ~0u; ++ring) {
+        int count = 0;
+        for (int dz = -ring; dz <= ring; ++dz)
+            for (int dy = -ring; dy <= ring; ++dy)
+                for (int dx = -ring; dx <= ring; ++dx) {
+                    if (ring == 1 && dx == 0 && dy == 0 && dz == 0) continue;
+                    const int32_t slot = cells.value(*cache.cells, nanovdb::Coord(centre.x + dx, centre.y + dy, centre.z + dz));
+                    if (slot < 0) continue;
+                    for (uint32_t q = cache.cellBegin[slot]; q < cache.cellBegin[slot + 1] && count < kMaxCandidates; ++q) {
+                        const float w = cacheWeight(cache.points[q], p, n, inverseCell);
+                        if (w > 0.0f) {
+                            candidate[count] = q;
+                            weight[count++] = w;
+                        }
+                    }
                 }
-            }
+        for (; tries < kHomeTries && home == ~0u; ++tries) {
+            int best = -1;
+            for (int k = 0; k < count; ++k)
+                if (weight[k] > 0.0f && (best < 0 || weight[k] > weight[best] ||
+                                         (weight[k] == weight[best] && candidate[k] < candidate[best])))
+                    best = k;
+            if (best < 0) break;
+            const GatherPoint& q = cache.points[candidate[best]];
+            if (clearPath(cache.occupancy, h, lifted, liftOffSurface(q.position, q.normal, h))) home = candidate[best];
+            weight[best] = 0.0f;  // tried
+        }
+    }
+    if (home == ~0u) return 0.0f;
+    float total = 0.0f;
+    for (uint32_t k = cache.neighbourBegin[home]; k < cache.neighbourBegin[home + 1]; ++k) {
+        const uint32_t q = cache.neighbours[k];
+        const float w = cacheWeight(cache.points[q], p, n, inverseCell);
+        if (!(w > 0.0f)) continue;
+        visit(q, w);
+        total += w;
+    }
     return total;
 }
 
@@ -198,6 +244,11 @@ public:
     void gather(const MipView& mips, const ConeSettings& settings, int turns = 1, Progress* progress = nullptr);
     // Irradiance computed elsewhere (a GPU launcher), one per point.
     void setIrradiance(std::vector<vec3> irradiance);
+    // Finds each point's neighbours: the points of the 3 × 3 × 3 cells around its own that
+    // face its way (n·n_q > 0) and that it sees (clearPath between both lifted off their
+    // surfaces, through level 0 of `mips`), itself included. Receivers interpolate from
+    // these (visitCachePoints); before linking no point applies.
+    void link(const MipView& mips);
     // `mips`: the radiance mips of the same voxels, whose level 0 tells what blocks the
     // path between a receiver and a gather point.
     IrradianceCacheView view(const MipView& mips) const;
@@ -211,6 +262,8 @@ private:
     std::vector<GatherPoint> points_;
     std::vector<uint32_t> cellBegin_;
     std::vector<vec3> irradiance_;
+    std::vector<ivec3> cellCoords_;  // per cell slot
+    std::vector<uint32_t> neighbourBegin_, neighbours_;
     nanovdb::GridHandle<nanovdb::HostBuffer> cells_;
 };
 

@@ -72,7 +72,10 @@ MipTexel makeTexel(const vec3& premultiplied, float alpha, float coverage) {
 // The face a cone travelling along `travel` sees: the one facing back at it.
 constexpr int facingFace(int travel) { return travel ^ 1; }
 
-// Level 0's values and texels from the voxels (level.coords are the voxels').
+// Level 0's values and texels from the voxels (level.coords are the voxels'). RadianceOnly:
+// the texels' α, σ and coverage are already there (they follow the voxels, not the light),
+// only the radiance is new.
+template <bool RadianceOnly>
 void lightLevelZero(MipLevel& level, const VoxelScene& voxels, const std::vector<vec3>& radiance,
                     const std::vector<FaceRadiance>* faces) {
     level.values.resize(voxels.size());
@@ -92,7 +95,10 @@ void lightLevelZero(MipLevel& level, const VoxelScene& voxels, const std::vector
             const int face = facingFace(travel);
             const float weight = w[size_t(face)];
             const float share = largest > 0.0f && weight > 0.0f && std::isfinite(weight) ? weight / largest : 0.0f;
-            texels[travel] = makeTexel(share * alpha * (*faces)[i][size_t(face)], alpha, share * alpha);
+            if (RadianceOnly)
+                texels[travel].radiance = share * alpha * (*faces)[i][size_t(face)];
+            else
+                texels[travel] = makeTexel(share * alpha * (*faces)[i][size_t(face)], alpha, share * alpha);
         }
     });
 }
@@ -102,11 +108,13 @@ MipLevel levelZero(const VoxelScene& voxels, const std::vector<vec3>& radiance, 
     level.voxelSize = voxels.voxelSize;
     level.coords = voxels.coords;
     level.facesPerVoxel = kFaceCount;
-    lightLevelZero(level, voxels, radiance, faces);
+    lightLevelZero<false>(level, voxels, radiance, faces);
     return level;
 }
 
-// One parent from its children (slot = child − 2·parent, x + 2y + 4z; −1 where absent).
+// One parent from its children (slot = child − 2·parent, x + 2y + 4z; −1 where absent);
+// RadianceOnly as lightLevelZero.
+template <bool RadianceOnly>
 void makeParent(const MipLevel& children, const std::array<int32_t, 8>& slots, vec4& value, MipTexel* texels) {
     value = vec4(0.0f);
     for (int slot : slots)
@@ -134,21 +142,26 @@ void makeParent(const MipLevel& children, const std::array<int32_t, 8>& slots, v
                 const MipTexel front = childTexel(towardsNegative ? 1 : 0, du, dv);
                 const MipTexel back = childTexel(towardsNegative ? 0 : 1, du, dv);
                 radiance += front.radiance + (1.0f - front.alpha) * back.radiance;
+                if (RadianceOnly) continue;
                 alpha += front.alpha + (1.0f - front.alpha) * back.alpha;
                 coverage += front.coverage + (1.0f - front.alpha) * back.coverage;
             }
-        texels[face] = makeTexel(0.25f * radiance, 0.25f * alpha, 0.25f * coverage);
+        if (RadianceOnly)
+            texels[face].radiance = 0.25f * radiance;
+        else
+            texels[face] = makeTexel(0.25f * radiance, 0.25f * alpha, 0.25f * coverage);
     }
 }
 
 // A parent level's values and texels from its children (parents.children set).
+template <bool RadianceOnly>
 void lightParents(MipLevel& parents, const MipLevel& children) {
     const size_t parentCount = parents.coords.size();
     parents.values.resize(parentCount);
     parents.texels.resize(parentCount * kFaceCount);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, parentCount), [&](const tbb::blocked_range<size_t>& range) {
         for (size_t p = range.begin(); p != range.end(); ++p)
-            makeParent(children, parents.children[p], parents.values[p], &parents.texels[p * kFaceCount]);
+            makeParent<RadianceOnly>(children, parents.children[p], parents.values[p], &parents.texels[p * kFaceCount]);
     });
 }
 
@@ -187,7 +200,7 @@ MipLevel parentLevel(const MipLevel& children, double baseVoxelSize, int level) 
             parents.children[p] = slots;
         }
     });
-    lightParents(parents, children);
+    lightParents<false>(parents, children);
     return parents;
 }
 
@@ -242,8 +255,8 @@ void RadianceMips::relight(const VoxelScene& voxels, const std::vector<vec3>& ra
         throw Error("RadianceMips::relight(" + voxels.sourceScene + "): the mips were built for " +
                     std::to_string(levels_.empty() ? 0 : levels_[0].coords.size()) + " voxels, not " +
                     std::to_string(voxels.size()));
-    lightLevelZero(levels_[0], voxels, radiance, &faceRadiance);
-    for (size_t k = 1; k < levels_.size(); ++k) lightParents(levels_[k], levels_[k - 1]);
+    lightLevelZero<true>(levels_[0], voxels, radiance, &faceRadiance);
+    for (size_t k = 1; k < levels_.size(); ++k) lightParents<true>(levels_[k], levels_[k - 1]);
 }
 
 size_t RadianceMips::memoryBytes() const {

@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <set>
 
 using namespace vl;
@@ -261,6 +262,44 @@ TEST_CASE("Camera receivers: each probe lies on its pinhole ray with the normal 
             }
         REQUIRE(partial > 0);  // the plane's edges cross some pixels
     }
+}
+
+TEST_CASE("Camera receivers with one sample per triangle merge a pixel's rays on each triangle", "[bake]") {
+    Scene scene = floorScene();  // y = 0.5, x ∈ [−1, 1], z ∈ [−2, 2]: two triangles
+    const SceneTriangles triangles = gatherTriangles(scene);
+    const Bvh bvh = Bvh::build(triangles);
+    const TraceScene trace = TraceScene::build(scene, triangles);
+    Camera camera;
+    camera.position = vec3(0.0f, 3.0f, 0.0f);
+    camera.forward = vec3(0.0f, -1.0f, 0.0f);
+    camera.up = vec3(0.0f, 0.0f, -1.0f);
+    camera.yfov = 1.4f;
+    const CameraModel model = makeCameraModel(camera, 6, 6);
+    const CameraReceivers rays = buildCameraReceivers(trace, bvh, model, 4);
+    const CameraReceivers merged = buildCameraReceivers(trace, bvh, model, 4, 0, true);
+    size_t split = 0;  // pixels the floor's diagonal crosses
+    for (size_t i = 0; i < rays.receivers.elementCount(); ++i) {
+        std::map<uint32_t, std::pair<float, vec3>> expected;  // triangle → (weight, Σ w·position)
+        for (uint32_t k = rays.receivers.begin[i]; k < rays.receivers.begin[i + 1]; ++k) {
+            const SurfaceSample& s = rays.receivers.samples[k];
+            expected[s.triangle].first += s.weight;
+            expected[s.triangle].second += s.weight * s.position;
+        }
+        REQUIRE(merged.receivers.sampleCount(i) == expected.size());
+        split += expected.size() > 1;
+        for (uint32_t k = merged.receivers.begin[i]; k < merged.receivers.begin[i + 1]; ++k) {
+            const SurfaceSample& m = merged.receivers.samples[k];
+            REQUIRE(expected.count(m.triangle) == 1);
+            const auto& [weight, weighted] = expected[m.triangle];
+            CHECK(m.weight == Approx(weight));
+            CHECK(glm::distance(m.position, weighted / weight) < 1e-5f);  // the hits' centroid
+            CHECK(m.normal == vec3(0.0f, 1.0f, 0.0f));
+        }
+    }
+    CHECK(split > 0);
+    // The image's own channels do not depend on how its shading samples are grouped.
+    CHECK(merged.mask.pixels == rays.mask.pixels);
+    CHECK(merged.albedo.pixels == rays.albedo.pixels);
 }
 
 namespace {

@@ -242,6 +242,7 @@ TEST_CASE("The GPU receiver kernel run on the host equals shadeReceivers bit for
     const ConeSettings cone;
     const DirectLightSettings direct;
     IrradianceCache cache(c.voxels, 2);
+    cache.link(mipView);
     cache.gather(mipView, cone);
     const IrradianceCacheView cacheView = cache.view(mipView);
     const ConeSet& set = coneSet(cone.coneCount);
@@ -334,6 +335,7 @@ TEST_CASE("GPU receiver shading agrees with the CPU on the Cornell lightmap", "[
 
     // The gather points' cones, and texels interpolating them.
     IrradianceCache cache(c.voxels, 2);
+    cache.link(mipView);
     cache.gather(mipView, ConeSettings{});
     const std::vector<vec3> gathered = cuda::gatherIrradianceCuda(cache.points(), mipView, ConeSettings{}, 1);
     REQUIRE(gathered.size() == cache.irradiance().size());
