@@ -79,7 +79,7 @@ IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level) : level_(l
         }
         GatherPoint point;
         point.position = vec3(position / double(end - begin));
-        point.turn = cellTurn(cell);
+        point.turn = cellTurn(cell, sides[begin].faceClass);
         const double length = glm::length(normal);
         // Side normals of one class all lean the same way, so the sum is far from zero.
         point.normal = length > 0.0 ? vec3(normal / length) : sides[begin].normal;
