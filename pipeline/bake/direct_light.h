@@ -82,8 +82,9 @@ VL_HOSTDEV inline vec3 emitterIrradiance(const TraceSceneView& s, const BvhView&
     for (int i = 0; i < strata; ++i)
         for (int j = 0; j < strata; ++j) {
             Pcg32 rng = Pcg32::forItem(seed, stream * uint64_t(strata * strata) + uint64_t(i * strata + j), 0xD1EC7u);
-            const vec2 u((static_cast<float>(i) + rng.next1D()) / static_cast<float>(strata),
-                         (static_cast<float>(j) + rng.next1D()) / static_cast<float>(strata));
+            vec2 u;
+            rng.next2D(u.x, u.y);
+            u = (vec2(float(i), float(j)) + u) / static_cast<float>(strata);
             const vec2 b = sampleUniformTriangle(u);
             const SurfaceHit point = surfaceAt(s, emitter, b.x, b.y);
             const vec3 d = point.position - p;

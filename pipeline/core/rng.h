@@ -41,6 +41,14 @@ public:
     // Uniform in [0, 1): 24 random bits, so the result is never rounded up to 1.
     VL_HOSTDEV float next1D() { return static_cast<float>(nextU32() >> 8) * 0x1p-24f; }
 
+    // Two draws, x first. Why not vec2(next1D(), next1D()): the order in which a call's
+    // arguments are evaluated is unspecified, and g++ (host) and nvcc (device) chose
+    // differently, so the same seed gave the CPU and the GPU different points.
+    VL_HOSTDEV void next2D(float& x, float& y) {
+        x = next1D();
+        y = next1D();
+    }
+
 private:
     uint64_t state_;
     uint64_t inc_;

@@ -79,8 +79,9 @@ VL_HOSTDEV inline PathEstimate cameraPixel(const TraceSceneView& scene, const Bv
                                            const PathKernelSettings& settings, int x, int y) {
     const uint64_t index = static_cast<uint64_t>(y) * static_cast<uint64_t>(camera.width) + static_cast<uint64_t>(x);
     Pcg32 patternRng = Pcg32::forItem(index, kPatternSample, settings.salt);
-    const vec2 pixelShift(patternRng.next1D(), patternRng.next1D());
-    const vec2 lensShift(patternRng.next1D(), patternRng.next1D());
+    vec2 pixelShift, lensShift;
+    patternRng.next2D(pixelShift.x, pixelShift.y);
+    patternRng.next2D(lensShift.x, lensShift.y);
     const int spp = settings.samplesPerPixel;
     PathAccumulator acc;
     for (int j = 0; j < spp; ++j) {

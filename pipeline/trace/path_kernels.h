@@ -104,7 +104,8 @@ VL_HOSTDEV inline vec3 punctualIrradiance(const TraceSceneView& s, const BvhView
 VL_HOSTDEV inline vec3 emitterIrradianceSample(const TraceSceneView& s, const BvhView& bvh, const vec3& p,
                                                const vec3& ng, const vec3& ns, Pcg32& rng) {
     const float uPick = rng.next1D();
-    const vec2 uPoint(rng.next1D(), rng.next1D());
+    vec2 uPoint;
+    rng.next2D(uPoint.x, uPoint.y);
     if (s.emitterCount == 0) return vec3(0.0f);
     const uint32_t triangle = s.emitters[pickEmitter(s, uPick)];
     const vec2 b = sampleUniformTriangle(uPoint);
@@ -169,7 +170,9 @@ VL_HOSTDEV inline void continuePath(const TraceSceneView& s, const BvhView& bvh,
             incident += emitterIrradianceSample(s, bvh, h.position, ng, ns, rng);
             const vec3 contribution = fOverPi * incident;
             if (isFinite(contribution)) sink += contribution;
-            wi = sampleDiffuseDirection(ns, vec2(rng.next1D(), rng.next1D()));
+            vec2 u;
+            rng.next2D(u.x, u.y);
+            wi = sampleDiffuseDirection(ns, u);
             bsdfPdf = diffusePdf(ns, wi);
             if (!(bsdfPdf > 0.0f) || glm::dot(wi, ng) <= 0.0f) return;
         } else {
