@@ -141,7 +141,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& d
     timed(result.stages, "bounces", [&] {
         Progress progress("bounces", uint64_t(settings.bounces) * result.voxels.size(), settings.quiet);
         propagateBounces(result.voxels, bounceConeSettings(settings), settings.bounces, settings.bounceGatherLevel,
-                         &progress);
+                         settings.bounceTail ? BounceTail::Geometric : BounceTail::None, &progress);
         return 0;
     });
     result.mips = timed(result.stages, "mips", [&] { return buildRadianceMips(result.voxels); });

@@ -66,6 +66,8 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.bounces = parseIntSetting("bounces", v, 0, 1024); }},
         {"bounce-cones", "cones per hemisphere of the voxel-to-voxel bounces: 6, 16 or 32 (default 6)",
          [](S& s, const std::string& v) { s.bounceCones = parseIntSetting("bounce-cones", v, 1, 64); }},
+        {"bounce-tail", "add the rest of the bounce series as a geometric tail after the last bounce (default true)",
+         [](S& s, const std::string& v) { s.bounceTail = parseBoolSetting("bounce-tail", v); }},
         {"gather-level", "receivers interpolate irradiance gathered once per surface side of each block of 2^n voxels; -1: every sample gathers its own cones (default 3)",
          [](S& s, const std::string& v) { s.gatherLevel = parseIntSetting("gather-level", v, -1, 16); }},
         {"gather-turns", "cone sets traced per gather point of the final gather, each turned by 1/n turn (default 2)",
@@ -132,7 +134,7 @@ std::string describeBakeSettings(const BakeSettings& s) {
         << ", fill-interior=" << s.voxel.fillInterior << ", normal-weights=" << toString(s.lighting.normalWeights)
         << ", hdda=" << (s.lighting.traversal == VisibilityTraversal::Hdda) << ", cones=" << s.cone.coneCount
         << ", aperture=" << s.cone.apertureDegrees << ", cone-offset=" << s.cone.startOffset
-        << ", step-factor=" << s.cone.stepFactor << ", bounces=" << s.bounces << ", bounce-cones=" << s.bounceCones << ", gather-level=" << s.gatherLevel << ", gather-turns=" << s.gatherTurns
+        << ", step-factor=" << s.cone.stepFactor << ", bounces=" << s.bounces << ", bounce-cones=" << s.bounceCones << ", bounce-tail=" << s.bounceTail << ", gather-level=" << s.gatherLevel << ", gather-turns=" << s.gatherTurns
         << ", bounce-gather-level=" << s.bounceGatherLevel << ", lightmap-res=" << s.lightmap.width
         << ", lightmap-subsamples=" << s.lightmap.subsamplesPerAxis << ", emitter-strata=" << s.direct.emitterStrata
         << ", width=" << s.imageWidth << ", height=" << s.imageHeight;

@@ -16,6 +16,9 @@ namespace vl {
 namespace {
 
 constexpr int kMaxBounces = 1024;
+// A ratio near 1 (a closed white room) would blow the tail up from a noisy estimate: its tail
+// is capped at 19 times the last bounce.
+constexpr double kMaxTailRatio = 0.95;
 
 void checkChannels(const VoxelScene& voxels) {
     const size_t n = voxels.size();
@@ -45,6 +48,17 @@ std::vector<vec3> isotropic(const VoxelScene& voxels, const std::vector<FaceRadi
     for (size_t i = 0; i < faces.size(); ++i)
         radiance[i] = faceWeightedMean(faces[i].data(), voxels.axisWeights[i].data());
     return radiance;
+}
+
+// Σ over faces of axis weight × (r + g + b) of a − b: how much light one bounce added.
+double addedLight(const VoxelScene& voxels, const std::vector<FaceRadiance>& a, const std::vector<FaceRadiance>& b) {
+    double sum = 0.0;
+    for (size_t i = 0; i < voxels.size(); ++i)
+        for (size_t f = 0; f < 6; ++f) {
+            const vec3 d = a[i][f] - b[i][f];
+            sum += double(voxels.axisWeights[i][f]) * double(d.x + d.y + d.z);
+        }
+    return sum;
 }
 
 // Which gather points each voxel side reads and how much (visitCachePoints), computed once:
@@ -108,7 +122,7 @@ SideWeights sideWeights(const VoxelScene& voxels, const IrradianceCacheView& cac
 }  // namespace
 
 void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces, int gatherLevel,
-                      Progress* progress) {
+                      BounceTail tail, Progress* progress) {
     validateConeSettings(settings);
     if (bounces < 0 || bounces > kMaxBounces)
         throw SettingsError("bounces = " + std::to_string(bounces) + " is outside [0, " +
@@ -125,6 +139,7 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
     cache.link(mips.view());
     const SideWeights weights = sideWeights(voxels, cache.view(mips.view()));
     std::vector<vec3> selfIrradiance(weights.selfGathered.size());
+    double added = 0.0, addedBefore = 0.0;  // light the last two bounces added
     for (int b = 0; b < bounces; ++b) {
         if (b > 0) mips.relight(voxels, isotropic(voxels, current), current);
         const MipView view = mips.view();
@@ -160,6 +175,21 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
         });
         if (progress) progress->advance(voxels.size());
         current.swap(next);
+        addedBefore = added;
+        added = addedLight(voxels, current, next);
+    }
+    // The series' tail: each further bounce adds r times what the last one did, r the ratio
+    // of the last two bounces' light (the dominant eigenvalue of the transport, which the
+    // increments approach after a few bounces), so the rest sums to ΔL·r/(1 − r) (Cohen et al.
+    // 1988's ambient term, from the iteration itself). Why: a bright interior keeps most of
+    // its light for many bounces (zdm2: r ≈ 0.85, its image error 40% after 8 bounces, 26%
+    // after 24); the tail takes it to the limit for the price of none.
+    if (tail == BounceTail::Geometric && bounces >= 2 && addedBefore > 0.0 && added > 0.0) {
+        const double r = std::min(added / addedBefore, kMaxTailRatio);
+        const float scale = static_cast<float>(r / (1.0 - r));
+        tbb::parallel_for(size_t(0), voxels.size(), [&](size_t i) {
+            for (size_t f = 0; f < 6; ++f) current[i][f] += scale * (current[i][f] - next[i][f]);
+        });
     }
     voxels.radiance = isotropic(voxels, current);
     voxels.faceRadiance = std::move(current);

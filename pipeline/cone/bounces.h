@@ -49,12 +49,19 @@ VL_HOSTDEV inline void faceIrradiance(const MipView& mips, const vec3& centre, c
     for (int f = 0; f < 6; ++f) faces[f] = sides.sideOfFace[f] >= 0 ? gathered[sides.sideOfFace[f]] : vec3(0.0f);
 }
 
-// Replaces voxels.faceRadiance and voxels.radiance with L_bounces. bounces = 0 leaves them
-// unchanged. Throws SettingsError for bounces < 0 or > 1024, a gather level outside 0..16 or
-// invalid settings, Error when radiance, faceRadiance (when present), albedo, normal,
-// axisWeights, opacity or solid do not match the voxel count. `progress`, when given,
-// advances by the voxel count once per bounce.
+// What follows the last bounce.
+enum class BounceTail {
+    None,         // L_bounces: exactly that many bounces
+    Geometric,    // L_bounces plus the series' geometric tail, ΔL·r/(1 − r) (bounces.cpp)
+};
+
+// Replaces voxels.faceRadiance and voxels.radiance with L_bounces (and its tail, which needs
+// bounces ≥ 2: the ratio of the last two). bounces = 0 leaves them unchanged. Throws
+// SettingsError for bounces < 0 or > 1024, a gather level outside 0..16 or invalid settings,
+// Error when radiance, faceRadiance (when present), albedo, normal, axisWeights, opacity or
+// solid do not match the voxel count. `progress`, when given, advances by the voxel count
+// once per bounce.
 void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces, int gatherLevel,
-                      Progress* progress = nullptr);
+                      BounceTail tail, Progress* progress = nullptr);
 
 }  // namespace vl

@@ -32,7 +32,7 @@ TEST_CASE("one bounce in a closed white box adds albedo times L0", "[cone]") {
     const float rho = 0.5f;
     for (int count : {6, 16}) {
         VoxelScene box = vl::test::closedBox(16, 1, l0, vec3(rho));
-        propagateBounces(box, settingsFor(count), 1, 0);
+        propagateBounces(box, settingsFor(count), 1, 0, BounceTail::None);
         float lowest = 1.0f, highest = 0.0f, mean = 0.0f;
         for (size_t i = 0; i < box.size(); ++i) {
             const vec3 added = (box.radiance[i] - l0) / (rho * l0);
@@ -46,7 +46,7 @@ TEST_CASE("one bounce in a closed white box adds albedo times L0", "[cone]") {
         CHECK(mean >= 0.92f);
     }
     VoxelScene twice = vl::test::closedBox(16, 1, l0, vec3(rho));
-    propagateBounces(twice, settingsFor(16), 2, 0);
+    propagateBounces(twice, settingsFor(16), 2, 0, BounceTail::None);
     const float g = 0.84f;  // the lowest gather fraction allowed above
     for (size_t i = 0; i < twice.size(); ++i) {
         const vec3 ratio = twice.radiance[i] / l0;
@@ -102,7 +102,7 @@ TEST_CASE("voxels whose normals cancel gather over both sides", "[cone]") {
     for (const vec3& v : nothing) CHECK(v == vec3(0.0f));
 
     // Through propagateBounces: each face of the sheet (albedo 1, dark) becomes ≈ L0.
-    propagateBounces(scene, settingsFor(16), 1, 0);
+    propagateBounces(scene, settingsFor(16), 1, 0, BounceTail::None);
     for (size_t i = 0; i < scene.size(); ++i)
         if (scene.coords[i].x == 8 && scene.coords[i].y == 8 && scene.coords[i].z == 8) {
             CHECK(scene.faceRadiance[i][0].x == Approx(1.0f).epsilon(0.1));
@@ -135,7 +135,7 @@ TEST_CASE("a bounce off a thin wall lit on one side stays on that side", "[cone]
     for (int y = -1; y <= n; ++y)
         for (int z = -1; z <= n; ++z) builder.add(ivec3(wallX, y, z), wall);
     VoxelScene scene = builder.build();
-    propagateBounces(scene, settingsFor(16), 1, 0);
+    propagateBounces(scene, settingsFor(16), 1, 0, BounceTail::None);
     size_t litBack = 0, darkFront = 0, inside = 0;
     for (size_t i = 0; i < scene.size(); ++i) {
         const ivec3 c = scene.coords[i];
@@ -170,7 +170,7 @@ TEST_CASE("propagateBounces gives the same bytes with 1 and 2 threads", "[cone]"
     const auto run = [&](int threads) {
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
         VoxelScene copy = scene;
-        propagateBounces(copy, settingsFor(6), 2, 0);
+        propagateBounces(copy, settingsFor(6), 2, 0, BounceTail::None);
         return copy.radiance;
     };
     const std::vector<vec3> one = run(1), two = run(2);
@@ -182,15 +182,39 @@ TEST_CASE("propagateBounces gives the same bytes with 1 and 2 threads", "[cone]"
 
 TEST_CASE("propagateBounces refuses bad settings and missing channels", "[cone]") {
     VoxelScene box = vl::test::closedBox(4, 1, vec3(1.0f), vec3(0.5f));
-    CHECK_THROWS_AS(propagateBounces(box, ConeSettings{}, -1, 0), SettingsError);
-    CHECK_THROWS_AS(propagateBounces(box, ConeSettings{}, 5000, 0), SettingsError);
+    CHECK_THROWS_AS(propagateBounces(box, ConeSettings{}, -1, 0, BounceTail::None), SettingsError);
+    CHECK_THROWS_AS(propagateBounces(box, ConeSettings{}, 5000, 0, BounceTail::None), SettingsError);
     ConeSettings bad;
     bad.apertureDegrees = -10.0f;
-    CHECK_THROWS_WITH(propagateBounces(box, bad, 1, 0), Catch::Contains("aperture"));
+    CHECK_THROWS_WITH(propagateBounces(box, bad, 1, 0, BounceTail::None), Catch::Contains("aperture"));
     VoxelScene unlit = box;
     unlit.radiance.clear();
-    CHECK_THROWS_WITH(propagateBounces(unlit, ConeSettings{}, 1, 0), Catch::Contains("radiance"));
+    CHECK_THROWS_WITH(propagateBounces(unlit, ConeSettings{}, 1, 0, BounceTail::None), Catch::Contains("radiance"));
     const std::vector<vec3> before = box.radiance;
-    propagateBounces(box, ConeSettings{}, 0, 0);
+    propagateBounces(box, ConeSettings{}, 0, 0, BounceTail::None);
     CHECK(box.radiance == before);
+}
+
+TEST_CASE("The geometric tail takes a closed box's bounces to their limit", "[cone]") {
+    // A closed box of uniform albedo ρ whose every voxel gathers the same fraction g of π·L:
+    // each bounce adds ρg times the last, so L_∞ = L0 / (1 − ρg). Two bounces and the tail
+    // (from the ratio of the last two) land on that limit, where two bounces alone fall short
+    // by (ρg)³/(1 − ρg), and 24 bounces agree with the tail.
+    const vec3 l0(1.0f);
+    const float rho = 0.5f;
+    const auto bake = [&](int bounces, BounceTail tail) {
+        VoxelScene box = vl::test::closedBox(16, 1, l0, vec3(rho));
+        ConeSettings settings;
+        settings.coneCount = 16;
+        propagateBounces(box, settings, bounces, 2, tail);
+        double mean = 0.0;
+        for (const vec3& r : box.radiance) mean += r.x / double(box.size());
+        return mean;
+    };
+    const double two = bake(2, BounceTail::None), twoWithTail = bake(2, BounceTail::Geometric);
+    const double many = bake(24, BounceTail::None);
+    INFO("mean L after 2 bounces " << two << ", with the tail " << twoWithTail << ", after 24 " << many);
+    CHECK(many > two * 1.05);                          // the tail holds real light
+    CHECK(twoWithTail == Approx(many).epsilon(0.01));  // and the extrapolation finds it
+    CHECK(many < 1.0 / (1.0 - rho) + 1e-6);            // never more than a perfect gather gives
 }

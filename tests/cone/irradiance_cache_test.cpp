@@ -218,7 +218,7 @@ TEST_CASE("Bounces gathered at coarse points match bounces gathered at every vox
     VoxelScene box = vl::test::closedBox(16, 1, l0, vec3(rho));
     ConeSettings settings;
     settings.coneCount = 16;
-    propagateBounces(box, settings, 1, 2);
+    propagateBounces(box, settings, 1, 2, BounceTail::None);
     float lowest = 1.0f, highest = 0.0f;
     for (size_t i = 0; i < box.size(); ++i) {
         const vec3 added = (box.radiance[i] - l0) / (rho * l0);

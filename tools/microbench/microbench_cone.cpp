@@ -61,7 +61,7 @@ void BM_Bounce(benchmark::State& state) {
     settings.coneCount = 6;
     for (auto _ : state) {
         VoxelScene copy = box;
-        propagateBounces(copy, settings, 1, 0);
+        propagateBounces(copy, settings, 1, 0, BounceTail::None);
         benchmark::DoNotOptimize(copy.radiance.data());
     }
     state.SetItemsProcessed(int64_t(state.iterations() * box.size()));
