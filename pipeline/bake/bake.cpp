@@ -107,9 +107,10 @@ void checkMemoryBudget(const Scene& scene, const BakeSettings& settings, double 
                             " is available: lower resolution, lightmap-res or the image size");
 }
 
-BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& diagnostics) {
+BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnostics) {
     validateBakeSettings(settings);
     const double voxelSize = voxelSizeFor(scene, settings.voxel);
+    anchorToVoxelGrid(scene, voxelSize);
     checkMemoryBudget(scene, settings, voxelSize);
     checkLightAttenuationNames(scene, settings.lighting);
     if (settings.outputs.lightmaps) checkAtlasGroups(scene, settings.lightmap);

@@ -52,7 +52,9 @@ struct BakeResult {
 
 // Checks that cost nothing (settings ranges, voxel count, memory) run first; throws
 // SettingsError / InputError before any expensive stage.
-BakeResult bake(const Scene& scene, const BakeSettings& settings, Diagnostics& diagnostics);
+// The scene is anchored to the voxel grid first (voxelize.h anchorToVoxelGrid); outputs that
+// carry positions (the grids' transform) keep it where it was in world space.
+BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnostics);
 
 // Refuses, before any work, a bake whose estimated memory exceeds what the machine has
 // available (SettingsError with both figures).

@@ -95,8 +95,9 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
     report.stages.push_back({"load", std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count()});
     addJobLightsAndCameras(job, scene);
     report.triangles = scene.triangleCount();
+    report.warnings = scene.warnings;
 
-    BakeResult result = bake(scene, settings, diagnostics);
+    BakeResult result = bake(std::move(scene), settings, diagnostics);
     report.stages.insert(report.stages.end(), result.stages.begin(), result.stages.end());
     report.voxels = result.voxels.size();
     report.voxelSize = result.voxels.voxelSize;
@@ -131,7 +132,6 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
         files.add("grids.vdb", [&](const std::string& p) { writeVoxelFile(result.voxels, p, mipGridsForFile(result.mips)); });
     }
     report.stages.push_back({"write", std::chrono::duration<double>(std::chrono::steady_clock::now() - writeStart).count()});
-    report.warnings = scene.warnings;
     report.warnings.insert(report.warnings.end(), diagnostics.warnings().begin(), diagnostics.warnings().end());
     report.peakMemoryBytes = peakResidentBytes();
     report.files.push_back("bake.json");
@@ -167,8 +167,16 @@ BakeReport runBake(const BakeJob& job) {
 }
 
 void addJobLightsAndCameras(const BakeJob& job, Scene& scene) {
-    scene.lights.insert(scene.lights.end(), job.addedLights.begin(), job.addedLights.end());
-    scene.cameras.insert(scene.cameras.end(), job.addedCameras.begin(), job.addedCameras.end());
+    // A job file places them in world space; the scene works in its local frame (scene.h).
+    const auto toLocal = [&](const vec3& world) { return vec3(glm::dvec3(world) - scene.origin); };
+    for (Light light : job.addedLights) {
+        light.position = toLocal(light.position);
+        scene.lights.push_back(light);
+    }
+    for (Camera camera : job.addedCameras) {
+        camera.position = toLocal(camera.position);
+        scene.cameras.push_back(camera);
+    }
 }
 
 }  // namespace vl

@@ -19,7 +19,8 @@ struct BakeJob {
     std::vector<Camera> addedCameras;  // cameras a job file adds (a level exported without one)
 };
 
-// The loaded scene with the job's added lights and cameras.
+// The loaded scene with the job's added lights and cameras (given in world space, placed in
+// the scene's local frame).
 void addJobLightsAndCameras(const BakeJob& job, Scene& scene);
 
 struct BakeReport {

@@ -32,7 +32,7 @@ VL_HOSTDEV inline bool isBuried(const TraceSceneView& scene, const BvhView& bvh,
     vec3 tangent, bitangent;
     orthonormalBasis(r.normal, tangent, bitangent);
     Ray ray;
-    ray.origin = offsetRayOrigin(r.position, r.normal);
+    ray.origin = offsetRayOrigin(r.position, r.normal, bvh.extent);
     int fromBehind = 0;
     for (int a = 0; a < kBuriedProbesPerAxis; ++a)
         for (int b = 0; b < kBuriedProbesPerAxis; ++b) {
@@ -62,12 +62,17 @@ struct ElementLighting {
 
 // Indirect irradiance at a receiver sample: interpolated from the gather points of `cache`
 // (irradiance_cache.h), or, without a cache or where no gather point applies, gathered by
-// cones at the sample itself, its set turned by coneTurn(seed).
+// cones at the sample itself, laid out in the frame that turns with the scene (gatherFrame)
+// and turned by coneTurn(seed) (a texel's or pixel's index, which the scene's placement
+// does not change).
 VL_HOSTDEV inline vec3 indirectIrradiance(const MipView& mips, const IrradianceCacheView* cache, const ConeSet& set,
                                           const ConeSettings& cone, const SurfaceSample& r, uint64_t seed) {
     vec3 E;
     if (cache && interpolateIrradiance(*cache, r.position, r.normal, E)) return E;
-    return coneTraceIrradiance(mips, r.position, r.normal, set, cone, nullptr, coneTurn(seed));
+    vec3 tangent;
+    float positionTurn;
+    gatherFrame(r.position, r.normal, mips.centre(), mips.voxelSize, tangent, positionTurn);
+    return coneTraceIrradiance(mips, r.position, r.normal, set, cone, nullptr, coneTurn(seed), &tangent);
 }
 
 // Samples [first, last) of `samples`; a sample's index seeds its direct term's strata and

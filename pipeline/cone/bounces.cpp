@@ -148,8 +148,13 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
             const size_t i = weights.selfGathered[k] / 6;
             const int side = static_cast<int>(weights.selfGathered[k] % 6);
             const VoxelSides sides = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
+            // The frame and turn come from where the voxel lies, not its index, so that they
+            // turn with the scene (gatherFrame).
+            vec3 tangent;
+            float turn;
+            gatherFrame(voxels.centre(i), sides.normal[side], view.centre(), view.voxelSize, tangent, turn);
             selfIrradiance[k] = coneTraceIrradiance(view, voxels.centre(i), sides.normal[side], set, settings, nullptr,
-                                                    coneTurn(i * 6 + size_t(side)));
+                                                    turn, &tangent);
         });
         const IrradianceCacheView points = cache.view(view);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, voxels.size()), [&](const tbb::blocked_range<size_t>& range) {

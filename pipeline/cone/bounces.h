@@ -38,7 +38,7 @@ class Progress;
 
 // Irradiance at each face of a voxel (see above): faces of one side get that side's E,
 // faces without surface zero. axisWeights: +X, −X, +Y, −Y, +Z, −Z. `turn`: the cone set's
-// rotation (coneTurn of the voxel's index in propagateBounces).
+// rotation about each side's normal.
 VL_HOSTDEV inline void faceIrradiance(const MipView& mips, const vec3& centre, const vec3& normal,
                                       const float* axisWeights, const ConeSet& set, const ConeSettings& settings,
                                       vec3 (&faces)[6], float turn = 0.0f) {

@@ -267,15 +267,22 @@ VL_HOSTDEV inline float coneHalfAngle(const ConeSet& set, const ConeSettings& se
 // between cones, so every receiver with the same frame makes the same mistake and the errors
 // form blotches. Receivers that turn their sets differently (coneTurn) make independent
 // mistakes, which the mips average away (bounces) or a pixel's sub-samples average.
+// `tangent`, when given (unit, orthogonal to n), is the frame's first axis before the turn;
+// else orthonormalBasis picks one from n alone.
 VL_HOSTDEV inline vec3 coneTraceIrradiance(const MipView& mips, const vec3& p, const vec3& n, const ConeSet& set,
                                            const ConeSettings& settings, float* occlusion = nullptr,
-                                           float turn = 0.0f) {
+                                           float turn = 0.0f, const vec3* frameTangent = nullptr) {
     if (occlusion) *occlusion = 0.0f;
     const float length = glm::length(n);
     if (!(length > 1.0e-6f) || !isFinite(length) || !isFinite(p)) return vec3(0.0f);
     const vec3 normal = n / length;
     vec3 tangent, bitangent;
-    orthonormalBasis(normal, tangent, bitangent);
+    if (frameTangent) {
+        tangent = *frameTangent;
+        bitangent = glm::cross(normal, tangent);
+    } else {
+        orthonormalBasis(normal, tangent, bitangent);
+    }
     if (turn != 0.0f) {
         const float angle = 2.0f * kPi * turn;
         const float c = cosf(angle), s = sinf(angle);

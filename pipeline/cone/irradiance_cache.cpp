@@ -10,6 +10,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -61,6 +62,14 @@ IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level) : level_(l
             sides.push_back({cell, dominantAxisFace(s.normal[k]), static_cast<uint32_t>(i), s.normal[k]});
     }
     tbb::parallel_sort(sides.begin(), sides.end());
+    // The voxels' centre, for the points' frames (gatherFrame).
+    ivec3 lo(std::numeric_limits<int>::max()), hi(std::numeric_limits<int>::min());
+    for (const ivec3& c : voxels.coords) {
+        lo = glm::min(lo, c);
+        hi = glm::max(hi, c);
+    }
+    const vec3 centre = n > 0 ? (vec3(lo) + vec3(hi)) * (0.5f * float(voxels.voxelSize)) : vec3(0.0f);
+    const float cellSize = float(std::ldexp(voxels.voxelSize, level));
 
     nanovdb::GridBuilder<int32_t> builder(-1);
     auto accessor = builder.getAccessor();
@@ -79,10 +88,10 @@ IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level) : level_(l
         }
         GatherPoint point;
         point.position = vec3(position / double(end - begin));
-        point.turn = cellTurn(cell, sides[begin].faceClass);
         const double length = glm::length(normal);
         // Side normals of one class all lean the same way, so the sum is far from zero.
         point.normal = length > 0.0 ? vec3(normal / length) : sides[begin].normal;
+        gatherFrame(point.position, point.normal, centre, cellSize, point.tangent, point.turn);
         points_.push_back(point);
         begin = end;
     }

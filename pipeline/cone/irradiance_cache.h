@@ -43,26 +43,43 @@ namespace vl {
 class Progress;
 
 struct GatherPoint {
-    vec3 position{0.0f};  // world
+    vec3 position{0.0f};  // local frame
     vec3 normal{0.0f};    // unit
-    float turn = 0.0f;    // of its cone set about the normal, in turns (cellTurn of its cell)
+    // The frame its cone set is laid out in: tangent (unit, ⊥ normal) and a turn about the
+    // normal from it (see gatherFrame).
+    vec3 tangent{1.0f, 0.0f, 0.0f};
+    float turn = 0.0f;
 };
 
 constexpr int kMaxGatherTurns = 16;
 
-// The turn of the cone sets gathered at the point of cell C facing `faceClass` (the signed
-// axis of its normal, dominantAxisFace): the R2 low-discrepancy sequence (Roberts 2018) over
-// the two cell coordinates across that axis, fract(u/φ₂ + v/φ₂²), φ₂ = 1.3247… (x³ = x + 1),
-// plus a half turn for every cell along it (parallel surfaces one cell apart). Neighbouring
-// points of a surface get turns far apart, so the few points a receiver interpolates see
-// the bright regions between one point's cones through another's. Random turns (a hash of
-// the point) let neighbours coincide: on the Cycles Cornell point-light box, with one cone
-// set per point, they left 9.6% relative RMSE in the image, R3-spread turns 9.3%.
-VL_HOSTDEV inline float cellTurn(const ivec3& cell, int faceClass) {
-    const int axis = faceClass >> 1;
-    const double v = double(cell[(axis + 1) % 3]) * 0.7548776662466927 +
-                     double(cell[(axis + 2) % 3]) * 0.5698402909980532 + double(cell[axis]) * 0.5;
-    return static_cast<float>(v - floor(v));
+// The frame of a gather point's cone set, from where the point lies relative to the voxels'
+// centre c (the middle of their bounding box) and nothing else, so that turning the scene a
+// quarter turn about c turns every point's cones with it (the voxel hierarchy maps onto
+// itself then too: voxelize.h anchorToVoxelGrid). r = p − c splits into a height r·n and a
+// part r⊥ across the normal. The tangent points along r⊥; the turn is the R2 low-discrepancy
+// sequence (Roberts 2018) over the cell-rounded |r⊥| and r·n, fract(u/φ₂ + v/φ₂²), φ₂ =
+// 1.3247… (x³ = x + 1). Neighbouring points of a surface differ in one or the other, so
+// their cone sets are turned apart and the few points a receiver interpolates see the bright
+// regions between one point's cones through another's (random turns let neighbours coincide:
+// on the Cycles Cornell point-light box they left 9.6% relative RMSE in the image, spread
+// turns 9.3%). A point on the axis through c along its normal (r⊥ ≈ 0) takes
+// orthonormalBasis's tangent.
+VL_HOSTDEV inline void gatherFrame(const vec3& p, const vec3& n, const vec3& centre, float cellSize, vec3& tangent,
+                                   float& turn) {
+    const vec3 r = p - centre;
+    const float height = glm::dot(r, n);
+    const vec3 across = r - height * n;
+    const float radius = glm::length(across);
+    if (radius > 1.0e-3f * cellSize) {
+        tangent = across / radius;
+    } else {
+        vec3 bitangent;
+        orthonormalBasis(n, tangent, bitangent);
+    }
+    const double v = floor(double(radius) / double(cellSize) + 0.5) * 0.7548776662466927 +
+                     floor(double(height) / double(cellSize) + 0.5) * 0.5698402909980532;
+    turn = static_cast<float>(v - floor(v));
 }
 
 using CellIndexGrid = nanovdb::NanoGrid<int32_t>;
@@ -216,7 +233,7 @@ VL_HOSTDEV inline vec3 gatherAtPoint(const MipView& mips, const GatherPoint& poi
     for (int t = 0; t < turns; ++t) {
         float turn = point.turn + float(t) / float(turns);
         turn -= glm::floor(turn);
-        sum += coneTraceIrradiance(mips, point.position, point.normal, set, settings, nullptr, turn);
+        sum += coneTraceIrradiance(mips, point.position, point.normal, set, settings, nullptr, turn, &point.tangent);
     }
     return sum / float(turns);
 }

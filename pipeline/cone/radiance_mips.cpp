@@ -289,6 +289,7 @@ RadianceMips buildMips(const VoxelScene& voxels, const std::vector<vec3>& radian
     checkInputs(voxels, radiance, faces);
     RadianceMips mips;
     mips.voxelSize_ = voxels.voxelSize;
+    mips.origin_ = voxels.origin;
     if (voxels.size() == 0) return mips;
 
     ivec3 lo = voxels.coords.front(), hi = voxels.coords.front();
@@ -317,6 +318,7 @@ std::vector<ExtraGrid> mipGridsForFile(const RadianceMips& mips) {
         radiance.name = "radiance_mip" + std::to_string(k);
         opacity.name = "opacity_mip" + std::to_string(k);
         radiance.voxelSize = opacity.voxelSize = level.voxelSize;
+        radiance.translation = opacity.translation = mips.origin() + glm::dvec3(level.centreOffset);
         radiance.coords = opacity.coords = level.coords;
         radiance.vectors.reserve(level.values.size());
         opacity.scalars.reserve(level.values.size());

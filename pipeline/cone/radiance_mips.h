@@ -118,6 +118,9 @@ struct MipView {
     float voxelSize = 0.0f;      // h (metres) of level 0
     vec3 boundsMin = vec3(0.0f);  // world box of the level-0 voxels' extents
     vec3 boundsMax = vec3(0.0f);
+
+    // The middle of that box: a point that turns with the scene (voxelize.h anchorToVoxelGrid).
+    VL_HOSTDEV vec3 centre() const { return 0.5f * (boundsMin + boundsMax); }
 };
 
 // Index-space position of world point p at `level`, with voxel centres at integers.
@@ -149,6 +152,7 @@ class RadianceMips {
 public:
     int levelCount() const { return static_cast<int>(levels_.size()); }
     double voxelSize() const { return voxelSize_; }
+    const glm::dvec3& origin() const { return origin_; }
     const MipLevel& level(int k) const { return levels_.at(static_cast<size_t>(k)); }
     const MipIndexGrid* indexGrid(int k) const;
     MipView view() const;
@@ -162,6 +166,7 @@ public:
 private:
     friend RadianceMips buildMips(const VoxelScene&, const std::vector<vec3>&, const std::vector<FaceRadiance>*);
     double voxelSize_ = 0.0;
+    glm::dvec3 origin_{0.0};  // the voxels' frame (VoxelScene::origin), for the file's grids
     vec3 boundsMin_ = vec3(0.0f), boundsMax_ = vec3(0.0f);
     std::vector<MipLevel> levels_;
     std::vector<nanovdb::GridHandle<nanovdb::HostBuffer>> grids_;
@@ -183,8 +188,8 @@ RadianceMips buildRadianceMips(const VoxelScene& voxels, const std::vector<vec3>
                                const std::vector<FaceRadiance>& faceRadiance);
 
 // Grids for grids.vdb: per level k, `radiance_mip<k>` (Vec3, the isotropic α-premultiplied
-// radiance) and `opacity_mip<k>` (float α), voxel size 2^k·h. ExtraGrid has no
-// translation: level k's voxel I is centred at I·2^k·h + MipLevel::centreOffset.
+// radiance) and `opacity_mip<k>` (float α), voxel size 2^k·h, level k's voxel I centred in
+// world space at the voxels' origin + I·2^k·h + MipLevel::centreOffset.
 std::vector<ExtraGrid> mipGridsForFile(const RadianceMips& mips);
 
 }  // namespace vl

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
@@ -18,6 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -165,7 +167,20 @@ public:
         checkAsset();
         checkImagesPresent();
         for (size_t m = 0; m < model_.materials.size(); ++m) scene_.materials.push_back(material(static_cast<int>(m)));
-        for (int root : sceneRoots()) visitHierarchy(root);
+        // The scene's local frame: its geometry's bounding box centred on the origin,
+        // found in double before any position is rounded to float (scene.h).
+        glm::dvec3 lower(std::numeric_limits<double>::infinity()), upper(-std::numeric_limits<double>::infinity());
+        visited_.clear();
+        for (int root : sceneRoots())
+            visitHierarchy(root, [&](int index, const glm::dmat4& world) {
+                const int meshIndex = model_.nodes[static_cast<size_t>(index)].mesh;
+                if (meshIndex >= 0) growBounds(meshIndex, world, lower, upper);
+            });
+        if (lower.x <= upper.x) scene_.origin = 0.5 * (lower + upper);
+        const glm::dmat4 toLocal = glm::translate(glm::dmat4(1.0), -scene_.origin);
+        visited_.clear();
+        for (int root : sceneRoots())
+            visitHierarchy(root, [&](int index, const glm::dmat4& world) { visitNode(index, toLocal * world); });
 
         if (skippedPrimitives_ > 0)
             warn("skipped " + std::to_string(skippedPrimitives_) +
@@ -428,8 +443,11 @@ private:
     }
 
     // Depth-first, children in order, without recursion (a deep chain must not overflow the
-    // stack); a node reached twice means a cycle or a shared child, both invalid glTF.
-    void visitHierarchy(int root) {
+    // stack); a node reached twice in one pass over the roots (visited_ cleared before it)
+    // means a cycle or a shared child, both invalid glTF. visit(node index, its world
+    // transform) for every node.
+    template <typename Visit>
+    void visitHierarchy(int root, Visit&& visit) {
         std::vector<std::pair<int, glm::dmat4>> stack{{root, glm::dmat4(1.0)}};
         while (!stack.empty()) {
             const auto [index, parent] = stack.back();
@@ -445,18 +463,50 @@ private:
             const tinygltf::Node& node = model_.nodes[static_cast<size_t>(index)];
             const glm::dmat4 world = parent * localTransform(index);
             if (!allFinite(world)) fail(nodeName(index) + " has a non-finite transform");
-            if (node.mesh >= 0) {
-                addMeshInstance(node.mesh, index, world);
-                if (node.skin >= 0 && skinnedNodes_++ == 0)
-                    warn(nodeName(index) + " is skinned; skins are not applied, the mesh stays in its bind pose");
-            }
-            if (node.camera >= 0) addCamera(node.camera, index, world);
-            if (const tinygltf::Value* light = member(node.extensions, "KHR_lights_punctual", "light")) {
-                if (!light->IsInt()) fail(nodeName(index) + ": KHR_lights_punctual.light is not an index");
-                addLight(light->GetNumberAsInt(), index, world);
-            }
+            visit(index, world);
             for (auto child = node.children.rbegin(); child != node.children.rend(); ++child)
                 stack.emplace_back(*child, world);
+        }
+    }
+
+    // A node's mesh, camera and light into the scene; `world` is already in the local frame.
+    void visitNode(int index, const glm::dmat4& world) {
+        const tinygltf::Node& node = model_.nodes[static_cast<size_t>(index)];
+        if (node.mesh >= 0) {
+            addMeshInstance(node.mesh, index, world);
+            if (node.skin >= 0 && skinnedNodes_++ == 0)
+                warn(nodeName(index) + " is skinned; skins are not applied, the mesh stays in its bind pose");
+        }
+        if (node.camera >= 0) addCamera(node.camera, index, world);
+        if (const tinygltf::Value* light = member(node.extensions, "KHR_lights_punctual", "light")) {
+            if (!light->IsInt()) fail(nodeName(index) + ": KHR_lights_punctual.light is not an index");
+            addLight(light->GetNumberAsInt(), index, world);
+        }
+    }
+
+    // The world box of a mesh instance's triangle positions, in double. Errors are left to
+    // the main pass (addMeshInstance), which reads the same accessors and reports them.
+    void growBounds(int meshIndex, const glm::dmat4& world, glm::dvec3& lower, glm::dvec3& upper) const {
+        if (static_cast<size_t>(meshIndex) >= model_.meshes.size()) return;
+        for (const tinygltf::Primitive& prim : model_.meshes[static_cast<size_t>(meshIndex)].primitives) {
+            const int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
+            if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN)
+                continue;
+            const auto it = prim.attributes.find("POSITION");
+            if (it == prim.attributes.end()) continue;
+            gltf::FloatArray positions;
+            try {
+                positions = gltf::readFloatAccessor(model_, it->second, {3}, path_ + " POSITION");
+            } catch (const InputError&) {
+                continue;
+            }
+            for (size_t i = 0; i < positions.count; ++i) {
+                const float* p = &positions.values[3 * i];
+                const glm::dvec3 w(world * glm::dvec4(p[0], p[1], p[2], 1.0));
+                if (!std::isfinite(w.x) || !std::isfinite(w.y) || !std::isfinite(w.z)) continue;
+                lower = glm::min(lower, w);
+                upper = glm::max(upper, w);
+            }
         }
     }
 

@@ -9,6 +9,16 @@ Aabb Scene::bounds() const {
     return box;
 }
 
+void Scene::moveOrigin(const glm::dvec3& newOrigin) {
+    const glm::dvec3 shift = origin - newOrigin;
+    const auto move = [&](vec3& p) { p = vec3(glm::dvec3(p) + shift); };
+    for (Mesh& mesh : meshes)
+        for (vec3& p : mesh.positions) move(p);
+    for (Light& light : lights) move(light.position);
+    for (Camera& camera : cameras) move(camera.position);
+    origin = newOrigin;
+}
+
 size_t Scene::triangleCount() const {
     size_t count = 0;
     for (const Mesh& mesh : meshes) count += mesh.triangleCount();

@@ -102,9 +102,15 @@ struct Camera {
     float focusDistance = 1.0f;       // metres along forward
 };
 
+// Positions, directions and lengths are in metres in the scene's local frame: world =
+// origin + local, origin the centre of the geometry's bounding box, found in double precision
+// before anything is rounded to float. Why: float holds a position 10 km from the world origin
+// to 1 mm, and voxels anchored at the world origin fell at other offsets inside their walls
+// when the scene moved; in the local frame a translated scene is the same floats.
 struct Scene {
     std::string sourcePath;  // the file it came from, for messages
     std::string name;        // file stem, used for output folders
+    glm::dvec3 origin{0.0};  // world position of the local frame's origin
     std::vector<Mesh> meshes;
     std::vector<Material> materials;
     std::vector<Texture> textures;
@@ -118,6 +124,9 @@ struct Scene {
     bool hasEmitters() const;  // any triangle with an emissive material
     // The material of a mesh; the glTF default material for -1.
     const Material& materialOf(const Mesh& mesh) const;
+    // Re-expresses every position relative to `newOrigin` (world space) instead of `origin`:
+    // for grids made in another frame (a .vdb whose translation is not this scene's origin).
+    void moveOrigin(const glm::dvec3& newOrigin);
 };
 
 }  // namespace vl

@@ -413,6 +413,10 @@ BvhView Bvh::view() const {
     v.nodeCount = static_cast<uint32_t>(nodes.size());
     v.wideNodes = wideNodes.empty() ? nullptr : wideNodes.data();
     v.wideNodeCount = static_cast<uint32_t>(wideNodes.size());
+    if (!nodes.empty()) {
+        const float largest = maxComponent(nodes[0].bounds.upper - nodes[0].bounds.lower);
+        if (largest > 0.0f && isFinite(largest)) v.extent = largest;
+    }
     return v;
 }
 

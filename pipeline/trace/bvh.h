@@ -54,6 +54,9 @@ struct BvhView {
     // [added by bvh] Optional: null → traversal walks the binary `nodes` instead (same hits).
     const BvhWideNode* wideNodes = nullptr;
     uint32_t wideNodeCount = 0;
+    // The largest side of the root's box (1 for an empty tree): the scale of ray offsets
+    // (ray_offset.h), so they are the same fraction of a 1 mm scene as of a 1 km one.
+    float extent = 1.0f;
 };
 
 // The deepest tree Bvh::build makes (it falls back to object-median splits to stay within

@@ -27,7 +27,10 @@ Camera defaultCamera(const Aabb& sceneBounds, float aspect) {
     camera.yfov = 0.8f;
     const Aabb box = sceneBounds.empty() ? Aabb{vec3(-1.0f), vec3(1.0f)} : sceneBounds;
     const vec3 centre = box.centre();
-    const float radius = glm::max(0.5f * glm::length(box.extent()), 1e-3f);
+    // A scene flat along every axis (a point) still gets a camera a unit away; any other
+    // scene's view scales with it (a 1 mm scene is framed like a 1 m one).
+    const float diagonal = glm::length(box.extent());
+    const float radius = diagonal > 0.0f ? 0.5f * diagonal : 1.0f;
     // Fit the bounding sphere into the narrower of the two fields of view.
     const float halfY = 0.5f * camera.yfov;
     const float halfX = std::atan(std::tan(halfY) * glm::max(aspect, 1e-3f));

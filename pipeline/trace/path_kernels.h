@@ -40,8 +40,8 @@ struct PathSample {
 VL_HOSTDEV inline bool occluded(const BvhView& bvh, const vec3& from, const vec3& fromNormal, const vec3& to,
                                 const vec3& toNormal) {
     Ray ray;
-    ray.origin = offsetRayOrigin(from, fromNormal);
-    const vec3 target = toNormal == vec3(0.0f) ? to : offsetRayOrigin(to, toNormal);
+    ray.origin = offsetRayOrigin(from, fromNormal, bvh.extent);
+    const vec3 target = toNormal == vec3(0.0f) ? to : offsetRayOrigin(to, toNormal, bvh.extent);
     ray.direction = target - ray.origin;
     ray.tMin = 0.0f;
     ray.tMax = 1.0f;
@@ -88,7 +88,7 @@ VL_HOSTDEV inline vec3 punctualIrradiance(const TraceSceneView& s, const BvhView
         bool blocked;
         if (toInfinity) {
             Ray ray;
-            ray.origin = offsetRayOrigin(p, ng);
+            ray.origin = offsetRayOrigin(p, ng, bvh.extent);
             ray.direction = wi;
             blocked = intersectAny(bvh, ray);
         } else {
@@ -190,7 +190,7 @@ VL_HOSTDEV inline void continuePath(const TraceSceneView& s, const BvhView& bvh,
         }
 
         Ray ray;
-        ray.origin = offsetRayOrigin(h.position, glm::dot(wi, ng) > 0.0f ? ng : -ng);
+        ray.origin = offsetRayOrigin(h.position, glm::dot(wi, ng) > 0.0f ? ng : -ng, bvh.extent);
         ray.direction = wi;
         Hit hit;
         if (!intersectClosest(bvh, ray, hit)) return;  // black world

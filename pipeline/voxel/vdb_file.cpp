@@ -274,14 +274,20 @@ private:
     std::map<std::string, openvdb::GridBase::ConstPtr> byName_;
 };
 
-// voxlight grids use a pure scale by h, centred on the origin (voxel_scene.h's convention).
-double requireVoxlightTransform(const openvdb::GridBase& grid, const std::string& path) {
+// A voxlight transform: a uniform scale by h, then a translation (voxel_scene.h). Gives h
+// and the translation.
+double requireVoxlightTransform(const openvdb::GridBase& grid, const std::string& path, glm::dvec3& translation) {
     const auto& transform = grid.constTransform();
     const openvdb::Vec3d size = transform.voxelSize();
     const openvdb::Vec3d origin = transform.indexToWorld(openvdb::Vec3d(0.0));
-    if (!transform.isLinear() || !transform.hasUniformScale() || !(size[0] > 0.0) || origin != openvdb::Vec3d(0.0))
+    const openvdb::Vec3d unit = transform.indexToWorld(openvdb::Vec3d(1.0, 1.0, 1.0)) - origin;
+    const bool axisAligned = std::abs(unit[0] - size[0]) <= 1e-9 * size[0] &&
+                             std::abs(unit[1] - size[0]) <= 1e-9 * size[0] && std::abs(unit[2] - size[0]) <= 1e-9 * size[0];
+    if (!transform.isLinear() || !transform.hasUniformScale() || !(size[0] > 0.0) || !axisAligned ||
+        !std::isfinite(origin[0]) || !std::isfinite(origin[1]) || !std::isfinite(origin[2]))
         throw InputError(path + ": grid '" + grid.getName() +
-                         "' does not have a uniform, origin-centred linear transform (voxlight's convention)");
+                         "' does not have an axis-aligned uniform scale with a translation (voxlight's convention)");
+    translation = glm::dvec3(origin[0], origin[1], origin[2]);
     return size[0];
 }
 
@@ -342,6 +348,7 @@ void writeVoxelFile(const VoxelScene& voxels, const std::string& path, const std
     for (const ExtraGrid& grid : extra) validateExtra(grid, names);
 
     const auto transform = openvdb::math::Transform::createLinearTransform(voxels.voxelSize);
+    transform->postTranslate(openvdb::Vec3d(voxels.origin.x, voxels.origin.y, voxels.origin.z));
     const auto& coords = voxels.coords;
     openvdb::GridPtrVec grids;
 
@@ -382,6 +389,7 @@ void writeVoxelFile(const VoxelScene& voxels, const std::string& path, const std
 
     for (const ExtraGrid& e : extra) {
         const auto extraTransform = openvdb::math::Transform::createLinearTransform(e.voxelSize);
+        extraTransform->postTranslate(openvdb::Vec3d(e.translation.x, e.translation.y, e.translation.z));
         if (e.isVector())
             grids.push_back(channelGrid<openvdb::Vec3SGrid>(e.name, extraTransform, e.coords,
                                                             [&](size_t i) { return toVdb(e.vectors[i]); }));
@@ -427,15 +435,20 @@ VoxelScene readVoxelFile(const std::string& path) {
     const auto axisNeg = set.get<Vec3SGrid>(grid_names::axisWeightsNeg, true, "vec3s");
 
     VoxelScene voxels;
-    voxels.voxelSize = requireVoxlightTransform(*opacity, path);
+    voxels.voxelSize = requireVoxlightTransform(*opacity, path, voxels.origin);
     const std::vector<const openvdb::GridBase*> all = {albedo.get(),   normal.get(),    emission.get(),
                                                        opacity.get(),  occlusion.get(), solid.get(),
                                                        radiance.get(), axisPos.get(),   axisNeg.get()};
-    for (const openvdb::GridBase* grid : all)
-        if (grid && requireVoxlightTransform(*grid, path) != voxels.voxelSize)
+    for (const openvdb::GridBase* grid : all) {
+        if (!grid) continue;
+        glm::dvec3 translation;
+        if (requireVoxlightTransform(*grid, path, translation) != voxels.voxelSize)
             throw InputError(path + ": grid '" + grid->getName() + "' has voxel size " +
                              std::to_string(grid->constTransform().voxelSize()[0]) + ", grid 'opacity' has " +
                              std::to_string(voxels.voxelSize));
+        if (translation != voxels.origin)
+            throw InputError(path + ": grid '" + grid->getName() + "' is translated otherwise than grid 'opacity'");
+    }
     if (auto size = set.metadata().getMetadata<openvdb::DoubleMetadata>(kMetaVoxelSize);
         size && size->value() != voxels.voxelSize)
         throw InputError(path + ": file metadata voxel_size " + std::to_string(size->value()) +
@@ -501,7 +514,7 @@ ExtraGrid readExtraGrid(const std::string& path, const std::string& gridName) {
     const openvdb::GridBase::Ptr base = vdb_detail::readGrid(path, gridName);
     ExtraGrid out;
     out.name = gridName;
-    out.voxelSize = requireVoxlightTransform(*base, path);
+    out.voxelSize = requireVoxlightTransform(*base, path, out.translation);
     if (auto scalar = openvdb::gridConstPtrCast<openvdb::FloatGrid>(base)) {
         out.coords = sortedActiveCoords(*scalar, path);
         out.scalars.resize(out.coords.size());

@@ -3,8 +3,9 @@
 // CUDA launchers include it cheaply. voxel/vdb_file.h turns it into OpenVDB grids named as
 // DESIGN.md says (albedo, normal, emission, opacity, occlusion, solid, radiance) and back.
 //
-// Index space follows OpenVDB: voxel (i, j, k) is centred at world (i, j, k)·h and spans
-// [(i−½)h, (i+½)h] on each axis; the transform is a plain linear scale by h.
+// Index space follows OpenVDB: voxel (i, j, k) is centred at (i, j, k)·h in the scene's local
+// frame (scene.h) and spans [(i−½)h, (i+½)h] on each axis; in world space at origin +
+// (i, j, k)·h (the .vdb transform: a scale by h, then a translation by origin).
 #pragma once
 
 #include "core/hostdev.h"
@@ -25,13 +26,14 @@ using FaceRadiance = std::array<vec3, 6>;
 
 struct VoxelSettings {
     double voxelSize = 0.0;   // metres; 0 = derive from resolution
-    int resolution = 128;     // voxels along the scene's longest axis when voxelSize is 0
+    int resolution = 128;     // voxels along the scene's longest axis when voxelSize is 0 (an even count less one)
     bool fillInterior = false;  // also mark voxels inside closed meshes solid
     int texelSamples = 4;     // texture samples per axis per voxel face area, over each triangle piece (albedo, emission)
 };
 
 struct VoxelScene {
     double voxelSize = 0.0;
+    glm::dvec3 origin{0.0};   // world position of the local frame's origin (Scene::origin)
     std::string sourceScene;  // path of the glTF it came from
     std::string settings;     // human-readable settings, stored as file metadata
 

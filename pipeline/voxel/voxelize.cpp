@@ -354,6 +354,12 @@ size_t mergeInside(VoxelScene& voxels, const std::vector<InsideVoxel>& inside, c
 
 }  // namespace
 
+void anchorToVoxelGrid(Scene& scene, double voxelSize) {
+    const Aabb box = scene.bounds();
+    if (box.empty()) return;
+    scene.moveOrigin(scene.origin + glm::dvec3(box.centre()) + glm::dvec3(0.5 * voxelSize));
+}
+
 double voxelSizeFor(const Scene& scene, const VoxelSettings& settings) {
     if (settings.texelSamples < 1 || settings.texelSamples > 64)
         throw SettingsError("voxelize: texelSamples must be in [1, 64], got " + std::to_string(settings.texelSamples));
@@ -389,7 +395,12 @@ double voxelSizeFor(const Scene& scene, const VoxelSettings& settings) {
         const double longest = std::max<double>(extent.x, std::max<double>(extent.y, extent.z));
         if (!(longest > 0.0))
             throw InputError(sceneLabel(scene) + ": the scene's bounds are a single point; give a voxel size");
-        h = longest / settings.resolution;
+        // An odd count: with the box centred on a voxel corner (anchorToVoxelGrid) the box's
+        // faces along its longest axis then fall on voxel centres, not on the faces between
+        // two voxels, where rounding puts a wall in one voxel layer or both (a scaled or
+        // rotated copy of the Cornell box baked 3% apart from the original that way).
+        const int voxels = settings.resolution % 2 == 1 ? settings.resolution : std::max(settings.resolution - 1, 1);
+        h = longest / voxels;
     }
     if (!(h > 0.0) || !std::isfinite(h)) throw SettingsError("voxelize: voxel size underflows to zero");
 
@@ -430,6 +441,7 @@ VoxelScene voxelize(const Scene& scene, const VoxelSettings& settings, Progress*
 
     VoxelScene out;
     out.voxelSize = h;
+    out.origin = scene.origin;
     out.sourceScene = scene.sourcePath;
     {
         std::ostringstream text;

@@ -60,6 +60,14 @@ struct VoxelizeStats {
 // pieces); InputError for a scene without triangles or with a non-finite position.
 double voxelSizeFor(const Scene& scene, const VoxelSettings& settings);
 
+// Moves the scene's local frame (Scene::moveOrigin) so its bounding box's centre sits on the
+// corner shared by voxels −1 and 0 on every axis. Why: that corner is a cell corner at every
+// level of the voxel hierarchy (level k groups voxels 2^k·I … 2^k·I + 2^k − 1), so the box's
+// 90° rotations and mirror images map voxels, mips and gather cells onto themselves, and the
+// grid follows the scene, not the world origin. A bake (bake.h) anchors the scene it is
+// given; anything that voxelizes a scene to pair it with another bake's grids must too.
+void anchorToVoxelGrid(Scene& scene, double voxelSize);
+
 // `progress`, when given, is advanced by one per triangle (construct it with
 // scene.triangleCount()).
 VoxelScene voxelize(const Scene& scene, const VoxelSettings& settings, Progress* progress = nullptr,

@@ -2,6 +2,7 @@
 #include "cone/irradiance_cache.h"
 #include "cone_scenes.h"
 #include "core/error.h"
+#include "core/rng.h"
 
 #include <catch2/catch.hpp>
 #include <tbb/global_control.h>
@@ -167,26 +168,42 @@ TEST_CASE("The sides of a two-sided sheet interpolate only their own side", "[co
     CHECK(bottom.x == Approx(0.5f));
 }
 
-TEST_CASE("Neighbouring cells' cone sets are turned far apart", "[cone]") {
-    // On a surface facing any axis, the nine points of a 3 × 3 block of cells get turns at
-    // least 0.05 apart (on the circle): each sees between another's cones.
-    for (int faceClass = 0; faceClass < 6; ++faceClass)
-        for (int origin = -5; origin <= 5; origin += 5) {
-            const int plane = faceClass / 2;
-            std::vector<float> turns;
-            for (int u = 0; u < 3; ++u)
-                for (int v = 0; v < 3; ++v) {
-                    ivec3 cell(origin);
-                    cell[(plane + 1) % 3] += u;
-                    cell[(plane + 2) % 3] += v;
-                    turns.push_back(cellTurn(cell, faceClass));
-                }
-            std::sort(turns.begin(), turns.end());
-            float gap = 1.0f - turns.back() + turns.front();
-            for (size_t k = 1; k < turns.size(); ++k) gap = std::min(gap, turns[k] - turns[k - 1]);
-            INFO("plane " << plane << ", origin " << origin);
-            CHECK(gap >= 0.05f);
+TEST_CASE("A gather point's cone frame turns with the scene about the voxels' centre", "[cone]") {
+    // Quarter turns about each axis through the centre: the tangent turns with the point and
+    // the turn about the normal stays, so the rotated point's cones are the rotated cones.
+    const vec3 centre(-0.05f, -0.05f, -0.05f);
+    const float cell = 0.8f;
+    Pcg32 rng(11, 3);
+    for (int trial = 0; trial < 200; ++trial) {
+        vec3 p;
+        rng.next2D(p.x, p.y);
+        p.z = rng.next1D();
+        p = centre + 10.0f * (p - vec3(0.5f));
+        vec3 n;
+        rng.next2D(n.x, n.y);
+        n.z = rng.next1D();
+        n = glm::normalize(n - vec3(0.5f));
+        vec3 tangent;
+        float turn;
+        gatherFrame(p, n, centre, cell, tangent, turn);
+        CHECK(std::abs(glm::dot(tangent, n)) < 1e-5f);
+        CHECK(glm::length(tangent) == Approx(1.0f));
+        for (int axis = 0; axis < 3; ++axis) {
+            // R: (a, b) → (b, −a) on the two other axes.
+            const auto rotate = [&](const vec3& v) {
+                vec3 out = v;
+                const int a = (axis + 1) % 3, b = (axis + 2) % 3;
+                out[a] = v[b];
+                out[b] = -v[a];
+                return out;
+            };
+            vec3 rotatedTangent;
+            float rotatedTurn;
+            gatherFrame(centre + rotate(p - centre), rotate(n), centre, cell, rotatedTangent, rotatedTurn);
+            CHECK(glm::distance(rotatedTangent, rotate(tangent)) < 1e-4f);
+            CHECK(rotatedTurn == Approx(turn).margin(1e-6));
         }
+    }
 }
 
 TEST_CASE("The gather gives the same bytes at 1 and 2 threads, and averages its turned sets", "[cone]") {

@@ -247,7 +247,7 @@ TEST_CASE("The Cornell references load with their walls emitter light and camera
     for (const Mesh& mesh : quad.meshes)  // the walls say "no specular" with ior 1.45; the emitter has none
         if (mesh.name != "Light/0") CHECK(quad.materialOf(mesh).ior == Approx(1.45f));
     REQUIRE(quad.cameras.size() == 1);
-    CHECK_NEAR(quad.cameras[0].position, vec3(0.278f, 0.273f, 0.8f), 1e-6f);
+    CHECK_NEAR(vl::test::world(quad, quad.cameras[0].position), vec3(0.278f, 0.273f, 0.8f), 1e-6f);
     CHECK_NEAR(quad.cameras[0].forward, vec3(0, 0, -1), 1e-6f);
     CHECK(quad.cameras[0].yfov == Approx(0.686048f));
     CHECK(quad.lights.empty());
@@ -260,7 +260,7 @@ TEST_CASE("The Cornell references load with their walls emitter light and camera
     REQUIRE(point.lights.size() == 1);
     CHECK(point.lights[0].type == LightType::Point);
     CHECK(point.lights[0].intensity == Approx(2.0 / (4.0 * 3.14159265358979)).epsilon(1e-6));
-    CHECK_NEAR(point.lights[0].position, vec3(0.278f, 0.5f, -0.2795f), 1e-6f);
+    CHECK_NEAR(vl::test::world(point, point.lights[0].position), vec3(0.278f, 0.5f, -0.2795f), 1e-6f);
 }
 
 TEST_CASE("The nvpro Cornell box loads with warnings for its odd bits", "[scene]") {

@@ -33,10 +33,10 @@ TEST_CASE("A node's translation rotation and scale place the quad exactly", "[sc
     const Mesh& mesh = scene.meshes[0];
     CHECK(mesh.name == "Quad/0");
     REQUIRE(mesh.positions.size() == 4);
-    CHECK_NEAR(mesh.positions[0], vec3(1, 2, 3), 1e-6f);
-    CHECK_NEAR(mesh.positions[1], vec3(1, 4, 3), 1e-6f);
-    CHECK_NEAR(mesh.positions[2], vec3(-1, 4, 3), 1e-6f);
-    CHECK_NEAR(mesh.positions[3], vec3(-1, 2, 3), 1e-6f);
+    CHECK_NEAR(vl::test::world(scene, mesh.positions[0]), vec3(1, 2, 3), 1e-6f);
+    CHECK_NEAR(vl::test::world(scene, mesh.positions[1]), vec3(1, 4, 3), 1e-6f);
+    CHECK_NEAR(vl::test::world(scene, mesh.positions[2]), vec3(-1, 4, 3), 1e-6f);
+    CHECK_NEAR(vl::test::world(scene, mesh.positions[3]), vec3(-1, 2, 3), 1e-6f);
     CHECK(mesh.indices == std::vector<uint32_t>{0, 1, 2, 0, 2, 3});
     for (const vec3& n : mesh.normals) CHECK_NEAR(n, vec3(0, 0, 1), 1e-6f);
     for (size_t t = 0; t < mesh.triangleCount(); ++t) CHECK_NEAR(faceNormal(mesh, t), vec3(0, 0, 1), 1e-6f);
@@ -60,9 +60,9 @@ TEST_CASE("Parent matrices compose with child transforms", "[scene]") {
     const Scene scene = loadQuiet(b.writeGltf(dir(), "hierarchy", members));
     REQUIRE(scene.meshes.size() == 1);
     const Mesh& mesh = scene.meshes[0];
-    CHECK_NEAR(mesh.positions[0], vec3(10, 3, 0));
-    CHECK_NEAR(mesh.positions[2], vec3(11, 6, 0));
-    CHECK_NEAR(mesh.positions[3], vec3(10, 6, 0));
+    CHECK_NEAR(vl::test::world(scene, mesh.positions[0]), vec3(10, 3, 0));
+    CHECK_NEAR(vl::test::world(scene, mesh.positions[2]), vec3(11, 6, 0));
+    CHECK_NEAR(vl::test::world(scene, mesh.positions[3]), vec3(10, 6, 0));
 }
 
 TEST_CASE("A mirroring node flips the winding so triangles stay counter-clockwise", "[scene]") {
@@ -73,8 +73,8 @@ TEST_CASE("A mirroring node flips the winding so triangles stay counter-clockwis
     const Scene scene = loadQuiet(b.writeGltf(dir(), "mirrored", members));
     REQUIRE(scene.meshes.size() == 1);
     const Mesh& mesh = scene.meshes[0];
-    CHECK_NEAR(mesh.positions[1], vec3(-1, 0, 0));
-    CHECK_NEAR(mesh.positions[2], vec3(-1, 1, 0));
+    CHECK_NEAR(vl::test::world(scene, mesh.positions[1]), vec3(-1, 0, 0));
+    CHECK_NEAR(vl::test::world(scene, mesh.positions[2]), vec3(-1, 1, 0));
     // The mirror keeps the plane's front at +Z (inverse transpose of diag(-1,1,1)); the index
     // order must agree with it.
     CHECK(mesh.indices == std::vector<uint32_t>{0, 2, 1, 0, 3, 2});
@@ -162,9 +162,9 @@ TEST_CASE("Sparse accessors override the dense values or zeros", "[scene]") {
     REQUIRE(scene.meshes.size() == 2);
     const std::vector<vec3> expected{{0, 0, 0}, {4, 0, 0}, {4, 2, 0}, {0, 1, 0}};
     REQUIRE(scene.meshes[0].positions.size() == 4);
-    for (size_t i = 0; i < 4; ++i) CHECK_NEAR(scene.meshes[0].positions[i], expected[i]);
+    for (size_t i = 0; i < 4; ++i) CHECK_NEAR(vl::test::world(scene, scene.meshes[0].positions[i]), expected[i]);
     REQUIRE(scene.meshes[1].positions.size() == 3);
-    for (size_t i = 0; i < 3; ++i) CHECK_NEAR(scene.meshes[1].positions[i], expected[i]);
+    for (size_t i = 0; i < 3; ++i) CHECK_NEAR(vl::test::world(scene, scene.meshes[1].positions[i]), expected[i]);
 }
 
 TEST_CASE("Normalized integer attributes and interleaved strides decode exactly", "[scene]") {
@@ -189,8 +189,8 @@ TEST_CASE("Normalized integer attributes and interleaved strides decode exactly"
     const Scene scene = loadQuiet(b.writeGltf(dir(), "normalized", members));
     REQUIRE(scene.meshes.size() == 1);
     const Mesh& mesh = scene.meshes[0];
-    CHECK_NEAR(mesh.positions[1], vec3(1, 0, 0));
-    CHECK_NEAR(mesh.positions[2], vec3(0, 1, 0));
+    CHECK_NEAR(vl::test::world(scene, mesh.positions[1]), vec3(1, 0, 0));
+    CHECK_NEAR(vl::test::world(scene, mesh.positions[2]), vec3(0, 1, 0));
     CHECK_NEAR(mesh.normals[1], vec3(0, 0, 1));
     REQUIRE(mesh.uv0.size() == 3);
     CHECK_NEAR(mesh.uv0[0], vec2(0, 1));
@@ -247,7 +247,7 @@ TEST_CASE("The default scene is loaded and other scenes are not", "[scene]") {
         "nodes": [{"mesh": 0, "translation": [5, 0, 0]}, {"mesh": 0, "translation": [0, 7, 0]}])";
     const Scene scene = loadQuiet(b.writeGltf(dir(), "two_scenes", members));
     REQUIRE(scene.meshes.size() == 1);
-    CHECK_NEAR(scene.meshes[0].positions[0], vec3(0, 7, 0));
+    CHECK_NEAR(vl::test::world(scene, scene.meshes[0].positions[0]), vec3(0, 7, 0));
 }
 
 TEST_CASE("A mesh used by two nodes becomes two world-space meshes", "[scene]") {
@@ -257,10 +257,12 @@ TEST_CASE("A mesh used by two nodes becomes two world-space meshes", "[scene]") 
         "nodes": [{"mesh": 0}, {"mesh": 0, "translation": [0, 0, -2]}])";
     const Scene scene = loadQuiet(b.writeGltf(dir(), "instanced", members));
     REQUIRE(scene.meshes.size() == 2);
-    CHECK_NEAR(scene.meshes[1].positions[2], vec3(1, 1, -2));
+    CHECK_NEAR(vl::test::world(scene, scene.meshes[1].positions[2]), vec3(1, 1, -2));
     CHECK(scene.triangleCount() == 4);
-    CHECK_NEAR(scene.bounds().lower, vec3(0, 0, -2));
-    CHECK_NEAR(scene.bounds().upper, vec3(1, 1, 0));
+    CHECK_NEAR(vl::test::world(scene, scene.bounds().lower), vec3(0, 0, -2));
+    CHECK_NEAR(vl::test::world(scene, scene.bounds().upper), vec3(1, 1, 0));
+    // The local frame is centred on the geometry's box (scene.h).
+    CHECK_NEAR(scene.bounds().lower, -scene.bounds().upper);
 }
 
 TEST_CASE("GLB files and embedded data URIs load the same geometry as .gltf with a .bin", "[scene]") {
@@ -274,7 +276,7 @@ TEST_CASE("GLB files and embedded data URIs load the same geometry as .gltf with
         INFO(path);
         const Scene scene = loadQuiet(path);
         REQUIRE(scene.meshes.size() == 1);
-        CHECK_NEAR(scene.meshes[0].positions[2], vec3(1, 1, 1));
+        CHECK_NEAR(vl::test::world(scene, scene.meshes[0].positions[2]), vec3(1, 1, 1));
         CHECK(scene.meshes[0].indices == std::vector<uint32_t>{0, 1, 2, 0, 2, 3});
         CHECK_NEAR(scene.meshes[0].uv0[3], vec2(0, 0));
     }

@@ -219,7 +219,7 @@ TEST_CASE("Punctual lights take the node's world transform and intensity over 68
     CHECK(spot.intensity == Approx(2.0f));
     CHECK(spot.innerConeAngle == Approx(0.2f));
     CHECK(spot.outerConeAngle == Approx(0.5f));
-    CHECK_NEAR(spot.position, vec3(1, 3, 0), 1e-6f);
+    CHECK_NEAR(vl::test::world(scene, spot.position), vec3(1, 3, 0), 1e-6f);
     CHECK_NEAR(spot.direction, vec3(0, 1, 0), 1e-6f);
 
     const Light& point = scene.lights[1];
@@ -228,7 +228,7 @@ TEST_CASE("Punctual lights take the node's world transform and intensity over 68
     CHECK(point.intensity == Approx(1.0f));  // 683 cd → 1 W/sr
     CHECK(point.range == 12.0f);
     CHECK_NEAR(point.radiantIntensity(), vec3(1, 0.5f, 0.25f));
-    CHECK_NEAR(point.position, vec3(0, 2, -1));
+    CHECK_NEAR(vl::test::world(scene, point.position), vec3(0, 2, -1));
 
     const Light& sun = scene.lights[2];
     CHECK(sun.type == LightType::Directional);
@@ -250,7 +250,7 @@ TEST_CASE("Perspective cameras take the node's position forward and up", "[scene
     REQUIRE(scene.cameras.size() == 1);
     const Camera& camera = scene.cameras[0];
     CHECK(camera.name == "Main");
-    CHECK_NEAR(camera.position, vec3(0, 1, 5));
+    CHECK_NEAR(vl::test::world(scene, camera.position), vec3(0, 1, 5));
     CHECK_NEAR(camera.forward, vec3(-1, 0, 0), 1e-6f);
     CHECK_NEAR(camera.up, vec3(0, 1, 0), 1e-6f);
     CHECK(camera.yfov == 0.5f);

@@ -30,6 +30,9 @@ std::string str(const glm::vec<N, float>& v) {
         CHECK(vl::test::near(a, b, ##__VA_ARGS__));                                   \
     } while (0)
 
+// A local position of `scene` in world space (scene.h: world = origin + local).
+inline vec3 world(const Scene& scene, const vec3& local) { return vec3(scene.origin + glm::dvec3(local)); }
+
 // Unit geometric normal of triangle t from its index order (CCW = front).
 inline vec3 faceNormal(const Mesh& mesh, size_t t) {
     const vec3& a = mesh.positions[mesh.indices[3 * t]];

@@ -222,12 +222,16 @@ TEST_CASE("A sphere of radius 1e6 seen from a point on its surface", "[trace]") 
 }
 
 TEST_CASE("Offset ray origins do not re-hit their own surface at 1e-3 and 1e3 scale", "[trace]") {
-    for (const float scale : {1e-3f, 1.0f, 1e3f}) {
-        // A quad (two triangles) of size `scale` at a position of magnitude ~`scale`,
-        // tilted so no coordinate is axis-aligned.
-        const vec3 base = scale * vec3(1.3f, 0.7f, -2.1f);
+    for (const float scale : {1e-3f, 1.0f, 1e3f})
+    for (const bool centred : {false, true}) {
+        // A quad (two triangles) of size `scale` at a position of magnitude ~`scale`, or
+        // centred on the origin as scenes are in their local frame (where a fixed offset
+        // near the origin would be a large part of a small scene), tilted so no coordinate
+        // is axis-aligned.
+        INFO("scale " << scale << (centred ? ", centred" : ""));
         const vec3 u = scale * glm::normalize(vec3(1.0f, 0.2f, -0.3f));
         const vec3 v = scale * glm::normalize(glm::cross(glm::normalize(vec3(0.1f, 1.0f, 0.4f)), u / scale));
+        const vec3 base = centred ? -0.5f * (u + v) : scale * vec3(1.3f, 0.7f, -2.1f);
         const vec3 quad[4] = {base, base + u, base + u + v, base + v};
         const vec3 normal = glm::normalize(glm::cross(u, v));
         Pcg32 rng(7, 1);
@@ -251,8 +255,8 @@ TEST_CASE("Offset ray origins do not re-hit their own surface at 1e-3 and 1e3 sc
             const float phi = 2.0f * kPi * rng.next1D(), elevation = 1e-3f + 9e-3f * rng.next1D();
             const vec3 along = std::cos(phi) * glm::normalize(u) + std::sin(phi) * glm::normalize(v);
             const vec3 out = glm::normalize(std::cos(elevation) * along + std::sin(elevation) * normal);
-            const vec3 origin = offsetRayOrigin(p, normal);
-            REQUIRE(glm::length(origin - p) <= 1e-4f * glm::length(p) + 1e-4f);  // small for its scale
+            const vec3 origin = offsetRayOrigin(p, normal, scale);
+            REQUIRE(glm::length(origin - p) <= 1e-4f * (glm::length(p) + scale));  // small for its scale
             TriangleHit again;
             REQUIRE_FALSE(intersectTriangle(makeRay(origin, out), quad[0], quad[1], quad[2], again));
             REQUIRE_FALSE(intersectTriangle(makeRay(origin, out), second[0], second[1], second[2], again));

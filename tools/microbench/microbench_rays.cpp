@@ -253,7 +253,7 @@ int main(int argc, char** argv) {
             const vec3 p = in.at(h.t);
             vec3 n = geometricNormal(tris, h.triangle);
             if (glm::dot(n, in.direction) > 0.0f) n = -n;
-            const vec3 origin = offsetRayOrigin(p, n);
+            const vec3 origin = offsetRayOrigin(p, n, view.extent);
             Pcg32 rng = Pcg32::forItem(i, 0, 1);
             vec3 t, b;
             orthonormalBasis(n, t, b);

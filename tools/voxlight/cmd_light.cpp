@@ -79,8 +79,11 @@ void runLight(const LightOptions& options) {
 
     LoadOptions load;
     load.strict = options.strict;
-    const Scene scene = loadGltf(options.scene, load);
+    Scene scene = loadGltf(options.scene, load);
     VoxelScene voxels = readVoxelFile(options.grids);
+    // Grids voxelized from this scene share its frame; others (another tool's, another
+    // version's) are lit in theirs.
+    if (voxels.origin != scene.origin) scene.moveOrigin(voxels.origin);
     if (!voxels.sourceScene.empty() &&
         std::filesystem::path(voxels.sourceScene).filename() != std::filesystem::path(options.scene).filename()) {
         const std::string message = options.grids + " was voxelized from '" + voxels.sourceScene + "', not '" +

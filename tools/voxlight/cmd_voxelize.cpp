@@ -53,7 +53,7 @@ void runVoxelize(const VoxelizeOptions& options, bool voxelSizeGiven, bool resol
     const auto start = std::chrono::steady_clock::now();
     LoadOptions load;
     load.strict = options.strict;
-    const Scene scene = loadGltf(options.scene, load);
+    Scene scene = loadGltf(options.scene, load);
 
     VoxelSettings settings;
     settings.voxelSize = voxelSizeGiven ? options.voxelSize : 0.0;
@@ -63,6 +63,7 @@ void runVoxelize(const VoxelizeOptions& options, bool voxelSizeGiven, bool resol
     VoxelScene voxels;
     {
         Progress progress("voxelize", scene.triangleCount(), options.quiet);
+        anchorToVoxelGrid(scene, voxelSizeFor(scene, settings));
         voxels = voxelize(scene, settings, &progress, &stats);
         progress.finish();
     }
