@@ -89,11 +89,8 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
     Diagnostics diagnostics(settings.strict);
 
     const auto loadStart = std::chrono::steady_clock::now();
-    LoadOptions options;
-    options.strict = settings.strict;
-    Scene scene = loadGltf(job.scenePath, options);
+    Scene scene = loadJobScene(job);
     report.stages.push_back({"load", std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count()});
-    addJobLightsAndCameras(job, scene);
     report.triangles = scene.triangleCount();
 
     BakeResult result = bake(scene, settings, diagnostics);
@@ -169,6 +166,14 @@ BakeReport runBake(const BakeJob& job) {
 void addJobLightsAndCameras(const BakeJob& job, Scene& scene) {
     scene.lights.insert(scene.lights.end(), job.addedLights.begin(), job.addedLights.end());
     scene.cameras.insert(scene.cameras.end(), job.addedCameras.begin(), job.addedCameras.end());
+}
+
+Scene loadJobScene(const BakeJob& job) {
+    LoadOptions options;
+    options.strict = job.settings.strict;
+    Scene scene = loadGltf(job.scenePath, options);
+    addJobLightsAndCameras(job, scene);
+    return scene;
 }
 
 }  // namespace vl

@@ -1,6 +1,7 @@
 #include "bench/report.h"
 
 #include "bench/display_path.h"
+#include "bench/format.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -36,14 +37,7 @@ const MethodStyle kMethods[] = {
     {"cycles-files", "Cycles (reference files, timings.json)", "#7f7f7f", 13},
 };
 
-std::string fmt(const char* format, double v) {
-    char text[64];
-    std::snprintf(text, sizeof text, format, v);
-    return text;
-}
-
 std::string pct(const BenchError& e) { return e.available ? fmt("%.1f%%", 100.0 * e.metrics.relativeRmse) : "—"; }
-std::string secs(double s) { return s > 0.0 ? fmt(s < 10.0 ? "%.2f" : "%.1f", s) : "—"; }
 
 std::string settingsText(const BenchPointSpec& spec) {
     std::string out;

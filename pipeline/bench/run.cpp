@@ -1,6 +1,7 @@
 #include "bench/run.h"
 
 #include "bench/cycles_peer.h"
+#include "bench/process_stats.h"
 #include "bench/report.h"
 #include "bench/traced_scene.h"
 #include "core/error.h"
@@ -9,13 +10,11 @@
 #include <tbb/info.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
-#include <sys/resource.h>
 
 namespace vl {
 namespace fs = std::filesystem;
@@ -25,36 +24,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
-
-// The peak resident set size of one point: Linux resets the high-water mark when "5" is
-// written to /proc/self/clear_refs; VmHWM in /proc/self/status is the mark since then.
-bool resetPeakMemory() {
-    std::ofstream out("/proc/self/clear_refs");
-    out << "5";
-    out.flush();
-    return static_cast<bool>(out);
-}
-
-double peakMemoryBytes() {
-    std::ifstream status("/proc/self/status");
-    std::string line;
-    while (std::getline(status, line))
-        if (line.rfind("VmHWM:", 0) == 0) {
-            std::istringstream in(line.substr(6));
-            double kib = 0.0;
-            in >> kib;
-            return kib * 1024.0;
-        }
-    rusage usage{};
-    getrusage(RUSAGE_SELF, &usage);
-    return usage.ru_maxrss * 1024.0;
-}
-
-double cpuSeconds() {
-    rusage usage{};
-    getrusage(RUSAGE_SELF, &usage);
-    return usage.ru_utime.tv_sec + usage.ru_stime.tv_sec + 1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-}
 
 double median(std::vector<double> v) {
     if (v.empty()) return 0.0;
