@@ -255,6 +255,15 @@ BenchResult runBench(const BenchOptions& options) {
                                                                    const std::string& im) { comparer.fromFiles(q, dir, lm, im); });
         for (BenchPointResult& p : files) result.points.push_back(std::move(p));
     }
+    if (options.scaling) {
+        try {
+            StageScalingAxes axes = options.scalingAxes;
+            axes.repeatLimitSeconds = options.repeatLimitSeconds;
+            result.scaling = runStageScaling(options.base, options.quiet, axes);
+        } catch (const std::exception& e) {
+            result.notes.push_back(std::string("no stage scaling: ") + e.what());
+        }
+    }
     writeBenchOutputs(result, options);
     return result;
 }

@@ -8,6 +8,7 @@
 #include "bench/run.h"
 #include "core/error.h"
 #include "support/paths.h"
+#include "tiny_job.h"
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
@@ -24,17 +25,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-BakeJob tinyJob(const std::string& output) {
-    BakeJob job;
-    job.scenePath = test::sourceDir() + "/scenes/cornell_box.gltf";
-    job.outputDir = output;
-    for (const auto& [name, value] : std::vector<std::pair<std::string, std::string>>{
-             {"resolution", "16"}, {"lightmap-res", "32"}, {"lightmap-subsamples", "2"}, {"width", "24"},
-             {"height", "24"}, {"image-subsamples", "1"}, {"emitter-strata", "2"}, {"voxel-emitter-strata", "1"}})
-        applySetting(bakeSettingsTable(), job.settings, name, value);
-    job.settings.quiet = true;
-    return job;
-}
+using test::tinyJob;
 
 BenchReferenceSettings tinyReference(const std::string& cache) {
     BenchReferenceSettings s;
