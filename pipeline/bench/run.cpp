@@ -170,24 +170,25 @@ std::vector<BenchPointSpec> benchSweep(bool full) {
         for (const std::string& v : values) vct(name + "=" + v, {{name, v}});
     };
     vct("default", {});
+    // The settings that move the default's time or error most: voxel resolution, where and
+    // how often the final gather runs, and the bounces.
     if (full) {
         each("resolution", {"32", "64", "96", "192", "256"});
         each("cones", {"6", "16"});
-        each("aperture", {"15", "30", "45"});
-        each("step-factor", {"0.25", "1"});
-        each("cone-offset", {"0.75", "3"});
+        each("step-factor", {"1"});
         each("normal-weights", {"lambert", "villegas"});
-        each("bounces", {"0", "1", "2", "4"});
-        each("bounce-cones", {"16"});
-        vct("resolution=64 cones=16", {{"resolution", "64"}, {"cones", "16"}});
-        vct("resolution=64 cones=16 step-factor=1", {{"resolution", "64"}, {"cones", "16"}, {"step-factor", "1"}});
+        each("bounces", {"0", "2", "4"});
+        each("gather-level", {"-1", "2"});  // -1: every receiver sample gathers its own cones (slower)
+        each("gather-turns", {"1"});
+        each("bounce-gather-level", {"2"});
+        each("voxel-emitter-strata", {"2"});
     } else {
         each("resolution", {"64", "192"});
-        each("cones", {"16"});
-        each("step-factor", {"1"});
+        each("gather-turns", {"1"});
+        each("gather-level", {"2"});
         each("bounces", {"2"});
-        vct("resolution=64 cones=16", {{"resolution", "64"}, {"cones", "16"}});
     }
+    vct("resolution=64 gather-turns=1", {{"resolution", "64"}, {"gather-turns", "1"}});  // the fast end
     const std::vector<int> spp = full ? std::vector<int>{4, 16, 64, 256, 1024} : std::vector<int>{16, 64, 256};
     for (int s : spp) points.push_back({"path", "spp=" + std::to_string(s), {}, s});
     return points;

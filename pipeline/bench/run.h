@@ -91,8 +91,8 @@ struct BenchResult {
     int repeats = 0;
 };
 
-// The default sweep (VCT default, one setting varied at a time; path tracer 16..256 spp), or
-// the full one (more values per setting, path tracer to 1024 spp).
+// The default sweep (VCT default, one setting varied at a time, one fast point; path tracer
+// 16..256 spp), or the full one (more settings and values, path tracer to 1024 spp).
 std::vector<BenchPointSpec> benchSweep(bool full);
 
 BenchResult runBench(const BenchOptions& options);
