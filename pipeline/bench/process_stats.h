@@ -14,4 +14,9 @@ double peakMemoryBytes();
 // User + system CPU seconds of the whole process so far.
 double cpuSeconds();
 
+// CPU seconds every process on the machine has used since boot (/proc/stat: user, nice,
+// system, irq, softirq, steal); 0 where there is no /proc/stat. Less this process's
+// cpuSeconds over an interval, it is the load others put on the machine meanwhile.
+double systemBusySeconds();
+
 }  // namespace vl

@@ -149,7 +149,7 @@ nlohmann::json scalingRunJson(const StageScalingRun& run) {
     return {{"label", run.label}, {"resolution", run.resolution}, {"lightmap_res", run.lightmapResolution},
             {"threads", run.threads}, {"bakes", run.bakes}, {"ok", run.ok}, {"error", run.error}, {"voxels", run.voxels},
             {"gather_points", run.gatherPoints}, {"covered_texels", run.coveredTexels}, {"pixels", run.pixels},
-            {"stage_seconds", stages}, {"total_seconds", run.totalSeconds()}, {"cpu_seconds", run.cpuSeconds},
+            {"stage_seconds", stages}, {"total_seconds", run.totalSeconds()}, {"cpu_seconds", run.cpuSeconds}, {"other_cores", run.otherCores},
             {"peak_memory_bytes", run.peakMemoryBytes}};
 }
 
@@ -506,26 +506,32 @@ std::string scalingMarkdown(const StageScaling& s, const BenchOptions& options) 
        << " threads, " << s.axes.repeats << " times (once when its first bake takes over "
        << fmt("%.0f", s.axes.repeatLimitSeconds)
        << " s); a stage's time is its fastest wall seconds (other load only adds time), CPU s that of the fastest "
-          "bake, peak MB the process's resident high-water mark during the run.\n\n";
+          "bake, others the cores other processes used meanwhile (/proc/stat), peak MB the process's resident "
+          "high-water mark during the run.\n\n";
     md << "| run | voxels | gather points | covered texels | pixels |";
     for (const std::string& stage : stages) md << ' ' << stage << " |";
-    md << " total | CPU s | peak MB |\n|---|---:|---:|---:|---:|";
+    md << " total | CPU s | others | peak MB |\n|---|---:|---:|---:|---:|";
     for (size_t i = 0; i < stages.size(); ++i) md << "---:|";
-    md << "---:|---:|---:|\n";
+    md << "---:|---:|---:|---:|\n";
     for (const StageScalingRun& run : s.runs) {
         if (!run.ok) {
-            md << "| " << run.label << " | failed: " << run.error << " |" << std::string(stages.size() + 6, '|') << "\n";
+            md << "| " << run.label << " | failed: " << run.error << " |" << std::string(stages.size() + 7, '|') << "\n";
             continue;
         }
         md << "| " << run.label << " | " << run.voxels << " | " << run.gatherPoints << " | " << run.coveredTexels << " | "
            << run.pixels << " |";
         for (const std::string& stage : stages) md << ' ' << stageSecs(run.stageSeconds(stage)) << " |";
-        md << ' ' << secs(run.totalSeconds()) << " | " << secs(run.cpuSeconds) << " | "
-           << fmt("%.0f", run.peakMemoryBytes / 1048576.0) << " |\n";
+        md << ' ' << secs(run.totalSeconds()) << " | " << secs(run.cpuSeconds) << " | " << fmt("%.1f", run.otherCores)
+           << " | " << fmt("%.0f", run.peakMemoryBytes / 1048576.0) << " |\n";
     }
     md << '\n';
     if (!s.speedups.empty()) {
-        md << "The base settings on 1 thread and on " << s.threads << ":\n\n";
+        md << "The base settings on 1 thread and on " << s.threads << " (other processes used "
+           << fmt("%.1f", s.oneThread->otherCores) << " cores during the one, ";
+        for (const StageScalingRun& run : s.runs)
+            if (run.resolution == s.oneThread->resolution && run.lightmapResolution == s.oneThread->lightmapResolution)
+                md << fmt("%.1f", run.otherCores);
+        md << " during the other):\n\n";
         md << "| stage | 1 thread s | " << s.threads << " threads s | speedup |\n|---|---:|---:|---:|\n";
         for (const ThreadSpeedup& t : s.speedups)
             md << "| " << t.stage << " | " << stageSecs(t.oneThreadSeconds) << " | " << stageSecs(t.allThreadsSeconds) << " | "

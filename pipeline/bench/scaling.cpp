@@ -3,12 +3,12 @@
 #include "bench/format.h"
 #include "bench/process_stats.h"
 #include "core/diagnostics.h"
-#include "core/error.h"
 
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <set>
@@ -58,9 +58,12 @@ StageScalingRun bakeRun(const Scene& scene, const BakeJob& base, int resolution,
         double fastestTotal = 0.0;
         for (int r = 0; r < std::max(1, axes.repeats); ++r) {
             Diagnostics diagnostics(settings.strict, false);
-            const double cpu = cpuSeconds();
+            const double cpu = cpuSeconds(), busy = systemBusySeconds();
+            const auto start = std::chrono::steady_clock::now();
             const BakeResult result = bake(scene, settings, diagnostics);
+            const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             const double cpuUsed = cpuSeconds() - cpu;
+            const double others = wall > 0.0 ? std::max(0.0, systemBusySeconds() - busy - cpuUsed) / wall : 0.0;
             ++run.bakes;
             if (r == 0) {
                 run.voxels = result.voxels.size();
@@ -74,6 +77,7 @@ StageScalingRun bakeRun(const Scene& scene, const BakeJob& base, int resolution,
             if (r == 0 || total < fastestTotal) {
                 fastestTotal = total;
                 run.cpuSeconds = cpuUsed;
+                run.otherCores = others;
             }
             keepFastest(run.stages, result.stages);
             if (r == 0 && total > axes.repeatLimitSeconds) break;
@@ -85,6 +89,12 @@ StageScalingRun bakeRun(const Scene& scene, const BakeJob& base, int resolution,
     }
     run.peakMemoryBytes = peakMemoryBytes();
     return run;
+}
+
+// The cores other processes took from the run's threads: those they used beyond the cores
+// the run left idle (a one-thread run on two cores shares nothing with one other process).
+double contention(const StageScalingRun& run, int threads) {
+    return std::max(0.0, run.otherCores - std::max(0, threads - run.threads));
 }
 
 double workOf(const StageScalingRun& run, const std::string& work) {
@@ -111,7 +121,8 @@ bool hasStage(const StageScalingRun& run, const std::string& stage) {
 }
 
 void analyseAxis(StageScaling& s, const std::vector<size_t>& axis, const std::string& axisName,
-                 const std::vector<std::string>& stages, std::set<std::string>& underFloor) {
+                 const std::vector<std::string>& stages, std::set<std::string>& underFloor,
+                 std::vector<std::string>& contended) {
     std::vector<const StageScalingRun*> ok;
     for (size_t i : axis)
         if (s.runs[i].ok) ok.push_back(&s.runs[i]);
@@ -128,10 +139,16 @@ void analyseAxis(StageScaling& s, const std::vector<size_t>& axis, const std::st
                                             workOf(b, work));
             g.from = a.label;
             g.to = b.label;
-            const std::string where = ", " + axisName + " " + std::to_string(axisValue(a)) + " → " + std::to_string(axisValue(b));
+            const std::string step = axisName + " " + std::to_string(axisValue(a)) + " → " + std::to_string(axisValue(b));
+            const std::string where = ", " + step;
             const double timeRatio = g.seconds1 > 0.0 ? g.seconds2 / g.seconds1 : 0.0;
             const bool underNoise = g.seconds1 < kScalingNoiseFloorSeconds || g.seconds2 < kScalingNoiseFloorSeconds;
-            if (g.rated) s.findings.push_back({g.text + where, g.flagged});
+            const double others = std::max(contention(a, s.threads), contention(b, s.threads));
+            if (others > kOtherLoadLimitCores) {  // the ratio is as much the other load's as the stage's
+                g.rated = g.flagged = false;
+                g.text = stage + ": not rated, other processes used " + fmt("%.1f", others) + " cores during a run";
+                if (std::find(contended.begin(), contended.end(), step) == contended.end()) contended.push_back(step);
+            } else if (g.rated) s.findings.push_back({g.text + where, g.flagged});
             else if (underNoise) underFloor.insert(stage);
             else if (timeRatio > kNotableTimeRatio || (timeRatio > 0.0 && timeRatio < 1.0 / kNotableTimeRatio))
                 s.findings.push_back({g.text + where, false});
@@ -173,12 +190,17 @@ void analyseThreads(StageScaling& s, const std::vector<std::string>& stages) {
         if (hasStage(one, stage) && hasStage(*all, stage)) add(stage, one.stageSeconds(stage), all->stageSeconds(stage));
     add("total", one.totalSeconds(), all->totalSeconds());
     const double target = kThreadEfficiencyTarget * s.threads;
+    // The threads need the cores: with others' load on them the speedup is the machine's.
+    const double others = std::max(contention(one, s.threads), contention(*all, s.threads));
+    const bool busy = others > kOtherLoadLimitCores;
     for (const ThreadSpeedup& t : s.speedups) {
         if (t.stage != "bounces" && t.stage != "gather") continue;
         const bool below = t.speedup < target;
-        s.findings.push_back({"1 → " + std::to_string(s.threads) + " threads: " + t.stage + " " + fmt("%.2f×", t.speedup) +
-                                  " (target ≥ " + fmt("%.2g×", target) + ")" + (below ? ": below the target" : ""),
-                              below});
+        std::string text = "1 → " + std::to_string(s.threads) + " threads: " + t.stage + " " + fmt("%.2f×", t.speedup) +
+                           " (target ≥ " + fmt("%.2g×", target) + ")";
+        if (busy) text += ": not rated, other processes used " + fmt("%.1f", others) + " cores meanwhile";
+        else if (below) text += ": below the target";
+        s.findings.push_back({text, below && !busy});
     }
 }
 
@@ -244,10 +266,12 @@ void analyseStageScaling(StageScaling& s) {
     s.growth.clear();
     s.findings.clear();
     s.speedups.clear();
+    s.notes.clear();
     const std::vector<std::string> stages = stageOrder(s);
     std::set<std::string> underFloor;
-    analyseAxis(s, s.resolutionAxis, "resolution", stages, underFloor);
-    analyseAxis(s, s.lightmapAxis, "lightmap-res", stages, underFloor);
+    std::vector<std::string> contended;  // steps, in the axes' order
+    analyseAxis(s, s.resolutionAxis, "resolution", stages, underFloor, contended);
+    analyseAxis(s, s.lightmapAxis, "lightmap-res", stages, underFloor, contended);
     analyseThreads(s, stages);
     if (!underFloor.empty()) {
         std::string names;
@@ -255,6 +279,12 @@ void analyseStageScaling(StageScaling& s) {
             if (underFloor.count(stage)) names += (names.empty() ? "" : ", ") + stage;
         s.notes.push_back("not rated where a time is under " + fmt("%.0f", 1000.0 * kScalingNoiseFloorSeconds) +
                           " ms (timer noise dominates): " + names);
+    }
+    if (!contended.empty()) {
+        std::string steps;
+        for (const std::string& step : contended) steps += (steps.empty() ? "" : ", ") + step;
+        s.notes.push_back("not rated where other processes took over " + fmt("%.2g", kOtherLoadLimitCores) +
+                          " of a run's cores (column others; bake again on a quiet machine): " + steps);
     }
     for (const StageScalingRun& run : s.runs)
         if (!run.ok) s.findings.push_back({run.label + " failed: " + run.error, true});
@@ -270,10 +300,6 @@ StageScaling runStageScaling(const BakeJob& base, bool quiet, const StageScaling
     const Scene scene = loadJobScene(base);
     const int baseResolution = base.settings.voxel.resolution;
     const int baseLightmap = base.settings.lightmap.width;
-    if (base.settings.voxel.voxelSize > 0.0)
-        s.notes.push_back("the job's voxel-size is left out: the runs set resolution (base " + std::to_string(baseResolution) + ")");
-    if (base.settings.lightmap.height != baseLightmap)
-        s.notes.push_back("the runs' lightmaps are square: lightmap-res sets width and height");
 
     auto sortedUnique = [](std::vector<int> v) {
         std::sort(v.begin(), v.end());
@@ -291,6 +317,10 @@ StageScaling runStageScaling(const BakeJob& base, bool quiet, const StageScaling
     for (int l : sortedUnique(axes.lightmapResolutions)) s.lightmapAxis.push_back(runIndex(baseResolution, l));
     if (axes.threads && s.threads > 1) s.oneThread = bakeRun(scene, base, baseResolution, baseLightmap, 1, axes, quiet);
     analyseStageScaling(s);
+    if (base.settings.voxel.voxelSize > 0.0)
+        s.notes.push_back("the job's voxel-size is left out: the runs set resolution (base " + std::to_string(baseResolution) + ")");
+    if (base.settings.lightmap.height != baseLightmap)
+        s.notes.push_back("the runs' lightmaps are square: lightmap-res sets width and height");
 
     if (!quiet) {
         for (const StageScalingRun& run : s.runs)

@@ -24,6 +24,9 @@ constexpr double kScalingNoiseFloorSeconds = 0.005;
 // Parallel efficiency expected of the stages that carry the bake (bounces, gather): the
 // issue's 1 → 2 threads ≥ 1.8×.
 constexpr double kThreadEfficiencyTarget = 0.9;
+// Other processes using more than this many cores during a run take cores its threads need:
+// its times carry their load, and a thread speedup measured then is not rated.
+constexpr double kOtherLoadLimitCores = 0.25;
 
 struct StageScalingAxes {
     std::vector<int> resolutions = {64, 128, 256};              // voxels along the longest axis
@@ -49,6 +52,7 @@ struct StageScalingRun {
     size_t pixels = 0;         // summed over the cameras
     std::vector<StageTime> stages;
     double cpuSeconds = 0.0;       // of the bake with the fastest total
+    double otherCores = 0.0;       // cores other processes used during that bake, on average
     double peakMemoryBytes = 0.0;  // over its bakes
 
     double stageSeconds(const std::string& stage) const;  // 0 when the run lacks it
@@ -104,8 +108,8 @@ struct StageScaling {
     std::vector<std::string> notes;           // what was not rated and why
 };
 
-// Growth, speedups, findings and notes from runs, axes and oneThread (no timing: testable
-// with hand-made runs).
+// Growth, speedups, findings and notes (each replaced) from runs, axes and oneThread (no
+// timing: testable with hand-made runs).
 void analyseStageScaling(StageScaling& scaling);
 
 // Bakes every run (a failed run records its error and the others go on); prints progress and

@@ -112,6 +112,25 @@ TEST_CASE("Stage scaling analysis rates each stage along its axis and the thread
     REQUIRE(s.notes.size() == 1);
     CHECK(s.notes[0].find("mips") != std::string::npos);
 
+    // Other processes on the base run's cores: neither its growth nor the speedup is rated.
+    s.runs[1].otherCores = 0.9;
+    analyseStageScaling(s);
+    CHECK(countFlagged(s, "1 → 2 threads: gather") == 0);
+    CHECK(std::any_of(s.findings.begin(), s.findings.end(), [](const ScalingFinding& f) {
+        return f.text.find("gather 1.50× (target ≥ 1.8×): not rated, other processes used 0.9 cores") != std::string::npos;
+    }));
+    CHECK(countFlagged(s, "gather: ") == 0);
+    CHECK_FALSE(s.growth[5].rated);
+    REQUIRE(s.notes.size() == 1);  // mips' pairs are not rated for the load before the noise floor
+    CHECK(s.notes[0].find("resolution 64 → 128, resolution 128 → 256") != std::string::npos);
+    // One other process beside the one-thread run leaves its core alone: still rated.
+    s.runs[1].otherCores = 0.0;
+    s.oneThread->otherCores = 1.0;
+    analyseStageScaling(s);
+    CHECK(countFlagged(s, "1 → 2 threads: gather") == 1);
+    CHECK(countFlagged(s, "gather: ") == 1);
+    CHECK(s.notes.size() == 1);
+
     // A failed run drops out of the pairs and is a flagged finding.
     s.runs[1].ok = false;
     s.runs[1].error = "out of memory";
