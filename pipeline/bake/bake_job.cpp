@@ -89,11 +89,8 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
     Diagnostics diagnostics(settings.strict);
 
     const auto loadStart = std::chrono::steady_clock::now();
-    LoadOptions options;
-    options.strict = settings.strict;
-    Scene scene = loadGltf(job.scenePath, options);
+    Scene scene = loadJobScene(job);
     report.stages.push_back({"load", std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count()});
-    addJobLightsAndCameras(job, scene);
     report.triangles = scene.triangleCount();
     report.warnings = scene.warnings;
 
@@ -177,6 +174,14 @@ void addJobLightsAndCameras(const BakeJob& job, Scene& scene) {
         camera.position = toLocal(camera.position);
         scene.cameras.push_back(camera);
     }
+}
+
+Scene loadJobScene(const BakeJob& job) {
+    LoadOptions options;
+    options.strict = job.settings.strict;
+    Scene scene = loadGltf(job.scenePath, options);
+    addJobLightsAndCameras(job, scene);
+    return scene;
 }
 
 }  // namespace vl

@@ -23,6 +23,10 @@ struct BakeJob {
 // the scene's local frame).
 void addJobLightsAndCameras(const BakeJob& job, Scene& scene);
 
+// The job's scene as every bake of it sees it: the glTF loaded (strict when its settings are)
+// with the job's added lights and cameras.
+Scene loadJobScene(const BakeJob& job);
+
 struct BakeReport {
     std::string scenePath;
     std::string outputDir;

@@ -1,6 +1,7 @@
 #include "bench/report.h"
 
 #include "bench/display_path.h"
+#include "bench/format.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -36,14 +37,7 @@ const MethodStyle kMethods[] = {
     {"cycles-files", "Cycles (reference files, timings.json)", "#7f7f7f", 13},
 };
 
-std::string fmt(const char* format, double v) {
-    char text[64];
-    std::snprintf(text, sizeof text, format, v);
-    return text;
-}
-
 std::string pct(const BenchError& e) { return e.available ? fmt("%.1f%%", 100.0 * e.metrics.relativeRmse) : "—"; }
-std::string secs(double s) { return s > 0.0 ? fmt(s < 10.0 ? "%.2f" : "%.1f", s) : "—"; }
 
 std::string settingsText(const BenchPointSpec& spec) {
     std::string out;
@@ -149,6 +143,41 @@ nlohmann::json errorJson(const BenchError& e) {
 
 nlohmann::json nanToNull(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
+nlohmann::json scalingRunJson(const StageScalingRun& run) {
+    nlohmann::json stages = nlohmann::json::object();
+    for (const StageTime& t : run.stages) stages[t.stage] = t.seconds;
+    return {{"label", run.label}, {"resolution", run.resolution}, {"lightmap_res", run.lightmapResolution},
+            {"threads", run.threads}, {"bakes", run.bakes}, {"ok", run.ok}, {"error", run.error}, {"voxels", run.voxels},
+            {"gather_points", run.gatherPoints}, {"covered_texels", run.coveredTexels}, {"pixels", run.pixels},
+            {"stage_seconds", stages}, {"total_seconds", run.totalSeconds()}, {"cpu_seconds", run.cpuSeconds}, {"other_cores", run.otherCores},
+            {"peak_memory_bytes", run.peakMemoryBytes}};
+}
+
+nlohmann::json scalingJson(const StageScaling& s) {
+    nlohmann::json runs = nlohmann::json::array(), growth = nlohmann::json::array(), speedups = nlohmann::json::array(),
+                   findings = nlohmann::json::array();
+    for (const StageScalingRun& run : s.runs) runs.push_back(scalingRunJson(run));
+    auto labels = [&](const std::vector<size_t>& axis) {
+        std::vector<std::string> out;
+        for (size_t i : axis) out.push_back(s.runs[i].label);
+        return out;
+    };
+    for (const StageGrowth& g : s.growth)
+        growth.push_back({{"stage", g.stage}, {"work", g.work}, {"from", g.from}, {"to", g.to}, {"seconds", {g.seconds1, g.seconds2}},
+                          {"work_amounts", {g.work1, g.work2}}, {"rated", g.rated},
+                          {"exponent", g.rated ? nlohmann::json(g.exponent) : nlohmann::json(nullptr)},
+                          {"flagged", g.flagged}, {"text", g.text}});
+    for (const ThreadSpeedup& t : s.speedups)
+        speedups.push_back({{"stage", t.stage}, {"one_thread_seconds", t.oneThreadSeconds},
+                            {"all_threads_seconds", t.allThreadsSeconds}, {"speedup", t.speedup}});
+    for (const ScalingFinding& f : s.findings) findings.push_back({{"text", f.text}, {"flagged", f.flagged}});
+    return {{"threads", s.threads}, {"runs", runs}, {"resolution_axis", labels(s.resolutionAxis)},
+            {"lightmap_axis", labels(s.lightmapAxis)},
+            {"one_thread", s.oneThread ? scalingRunJson(*s.oneThread) : nlohmann::json(nullptr)},
+            {"thread_speedup", speedups}, {"growth", growth}, {"findings", findings}, {"notes", s.notes},
+            {"exponent_limit", kGrowthExponentLimit}, {"noise_floor_seconds", kScalingNoiseFloorSeconds}};
+}
+
 void writeJson(BenchResult& r, const nlohmann::json& headline) {
     nlohmann::json j;
     j["scene"] = displayPath(r.scenePath, r.outputDir);
@@ -176,6 +205,7 @@ void writeJson(BenchResult& r, const nlohmann::json& headline) {
                           {"outputs", displayPath(p.outputDir, r.outputDir)}});
     }
     j["points"] = points;
+    if (r.scaling) j["scaling"] = scalingJson(*r.scaling);
     writeText(fs::path(r.outputDir) / "bench.json", j.dump(2) + "\n");
     r.files.push_back("bench.json");
 }
@@ -351,33 +381,66 @@ std::string reachText(const Reach& reach, double vctSeconds) {
     return s + ")";
 }
 
+// "the VCT is 2.3× faster" / "5.8× slower": the other method's time to the VCT's error over
+// the VCT's time.
+std::string speedText(const Reach& reach, double vctSeconds) {
+    const double ratio = reach.seconds / vctSeconds;
+    return ratio >= 1.0 ? "**" + fmt("%.2g×", ratio) + " faster**" : "**" + fmt("%.2g×", 1.0 / ratio) + " slower**";
+}
+
 nlohmann::json headline(const BenchResult& r, std::string& markdown) {
     nlohmann::json h;
     const BenchPointResult* vct = findPoint(r, "vct", "default");
-    if (!vct || !vct->lightmap.available || !(vct->lightmapSeconds > 0.0)) return h;
-    const double e = vct->lightmap.metrics.relativeRmse, t = vct->lightmapSeconds;
-    h["vct_default"] = {{"lightmap_relative_rmse", e}, {"lightmap_seconds", t}, {"cpu_seconds", vct->cpuSeconds}};
+    if (!vct) return h;
+    // The outputs the VCT default measured: the lightmap, the image, each with its error and time.
+    struct Output {
+        const char* name;
+        bool image;
+        const BenchError& error;
+        const BenchError& indirect;
+        double seconds;
+    };
+    std::vector<Output> outputs;
+    for (const Output& o : {Output{"lightmap", false, vct->lightmap, vct->lightmapIndirect, vct->lightmapSeconds},
+                            Output{"image", true, vct->image, vct->imageIndirect, vct->imageSeconds}})
+        if (o.error.available && o.seconds > 0.0) outputs.push_back(o);
+    if (outputs.empty()) return h;
+
     std::ostringstream md;
-    md << "- **VCT default bake**: lightmap relative RMSE **" << pct(vct->lightmap) << "** in **" << secs(t)
-       << " s** (indirect part " << pct(vct->lightmapIndirect) << "; the whole bake with the " << pct(vct->image)
-       << " image: " << secs(vct->cpuSeconds) << " CPU s).\n";
+    h["vct_default"] = {{"cpu_seconds", vct->cpuSeconds}};
+    md << "- **VCT default bake**:";
+    for (size_t i = 0; i < outputs.size(); ++i) {
+        const Output& o = outputs[i];
+        h["vct_default"][std::string(o.name) + "_relative_rmse"] = o.error.metrics.relativeRmse;
+        h["vct_default"][std::string(o.name) + "_seconds"] = o.seconds;
+        md << (i ? ";" : "") << ' ' << o.name << " relative RMSE **" << pct(o.error) << "** in **" << secs(o.seconds)
+           << " s** (indirect part " << pct(o.indirect) << ")";
+    }
+    md << "; the whole bake: " << secs(vct->cpuSeconds) << " CPU s.\n";
     for (const MethodStyle& m : kMethods) {
         if (std::string(m.method) == "vct") continue;
-        const Series s = series(r, m.method, false);
-        if (s.empty()) continue;
-        const Reach same = timeToReach(s, e);
-        const Reach atTime = errorAtTime(s, t);
-        h[m.method] = {{"seconds_to_reach_vct_error", same.found ? nlohmann::json(same.seconds) : nlohmann::json(nullptr)},
-                       {"how", same.how},
-                       {"time_ratio", same.found ? nlohmann::json(same.seconds / t) : nlohmann::json(nullptr)},
-                       {"error_at_vct_time", atTime.found ? nlohmann::json(atTime.seconds) : nlohmann::json(nullptr)},
-                       {"error_at_vct_time_how", atTime.how}};
-        md << "- **" << m.title << "**: reaches " << pct(vct->lightmap) << " in " << reachText(same, t);
-        if (atTime.found)
-            md << "; at the VCT's " << secs(t) << " s its error is " << fmt("%.1f%%", 100.0 * atTime.seconds) << " ("
-               << fmt("%.2g×", atTime.seconds / e) << " the VCT's" << (atTime.how != "interpolated" ? "; " + atTime.how : "")
-               << ")";
-        md << ".\n";
+        std::ostringstream lines;
+        for (const Output& o : outputs) {
+            const Series s = series(r, m.method, o.image);
+            if (s.empty()) continue;
+            const double e = o.error.metrics.relativeRmse, t = o.seconds;
+            const Reach same = timeToReach(s, e);
+            const Reach atTime = errorAtTime(s, t);
+            h[m.method][o.name] = {
+                {"seconds_to_reach_vct_error", same.found ? nlohmann::json(same.seconds) : nlohmann::json(nullptr)},
+                {"how", same.how},
+                {"time_ratio", same.found ? nlohmann::json(same.seconds / t) : nlohmann::json(nullptr)},
+                {"error_at_vct_time", atTime.found ? nlohmann::json(atTime.seconds) : nlohmann::json(nullptr)},
+                {"error_at_vct_time_how", atTime.how}};
+            lines << "  - " << o.name << ": reaches " << pct(o.error) << " in " << reachText(same, t);
+            if (same.found) lines << ": the VCT is " << speedText(same, t) << " at equal " << o.name << " error";
+            if (atTime.found)
+                lines << "; at the VCT's " << secs(t) << " s its error is " << fmt("%.1f%%", 100.0 * atTime.seconds) << " ("
+                      << fmt("%.2g×", atTime.seconds / e) << " the VCT's"
+                      << (atTime.how != "interpolated" ? "; " + atTime.how : "") << ")";
+            lines << ".\n";
+        }
+        if (!lines.str().empty()) md << "- **" << m.title << "**\n" << lines.str();
     }
     markdown = md.str();
     return h;
@@ -419,6 +482,73 @@ std::string table(const BenchResult& r, bool markdown) {
     return out.str();
 }
 
+// Stage times to the millisecond below 0.1 s: the small stages are what the noise floor is about.
+std::string stageSecs(double s) { return s > 0.0 && s < 0.1 ? fmt("%.3f", s) : secs(s); }
+
+std::string scalingMarkdown(const StageScaling& s, const BenchOptions& options) {
+    std::vector<std::string> stages;  // in the bake's order
+    for (const StageScalingRun& run : s.runs)
+        for (const StageTime& t : run.stages)
+            if (std::find(stages.begin(), stages.end(), t.stage) == stages.end()) stages.push_back(t.stage);
+    auto axisValues = [&](const std::vector<size_t>& axis, bool resolution) {
+        std::string out;
+        for (size_t i : axis)
+            out += (out.empty() ? "" : " / ") + std::to_string(resolution ? s.runs[i].resolution : s.runs[i].lightmapResolution);
+        return out;
+    };
+    const BakeSettings& base = options.base.settings;
+    std::ostringstream md;
+    md << "## How the stages scale\n\n";
+    md << "Scene `" << fs::path(s.scenePath).filename().string() << "`, the bench's base settings with voxel resolution "
+       << axisValues(s.resolutionAxis, true) << " (lightmap " << base.lightmap.width << "²) and lightmap resolution "
+       << axisValues(s.lightmapAxis, false) << " (resolution " << base.voxel.resolution << "), image "
+       << base.imageWidth << "×" << base.imageHeight << ". Each run bakes in memory (no files) on " << s.threads
+       << " threads, " << s.axes.repeats << " times (once when its first bake takes over "
+       << fmt("%.0f", s.axes.repeatLimitSeconds)
+       << " s); a stage's time is its fastest wall seconds (other load only adds time), CPU s that of the fastest "
+          "bake, others the cores other processes used meanwhile (/proc/stat), peak MB the process's resident "
+          "high-water mark during the run.\n\n";
+    md << "| run | voxels | gather points | covered texels | pixels |";
+    for (const std::string& stage : stages) md << ' ' << stage << " |";
+    md << " total | CPU s | others | peak MB |\n|---|---:|---:|---:|---:|";
+    for (size_t i = 0; i < stages.size(); ++i) md << "---:|";
+    md << "---:|---:|---:|---:|\n";
+    for (const StageScalingRun& run : s.runs) {
+        if (!run.ok) {
+            md << "| " << run.label << " | failed: " << run.error << " |" << std::string(stages.size() + 7, '|') << "\n";
+            continue;
+        }
+        md << "| " << run.label << " | " << run.voxels << " | " << run.gatherPoints << " | " << run.coveredTexels << " | "
+           << run.pixels << " |";
+        for (const std::string& stage : stages) md << ' ' << stageSecs(run.stageSeconds(stage)) << " |";
+        md << ' ' << secs(run.totalSeconds()) << " | " << secs(run.cpuSeconds) << " | " << fmt("%.1f", run.otherCores)
+           << " | " << fmt("%.0f", run.peakMemoryBytes / 1048576.0) << " |\n";
+    }
+    md << '\n';
+    if (!s.speedups.empty()) {
+        md << "The base settings on 1 thread and on " << s.threads << " (other processes used "
+           << fmt("%.1f", s.oneThread->otherCores) << " cores during the one, ";
+        for (const StageScalingRun& run : s.runs)
+            if (run.resolution == s.oneThread->resolution && run.lightmapResolution == s.oneThread->lightmapResolution)
+                md << fmt("%.1f", run.otherCores);
+        md << " during the other):\n\n";
+        md << "| stage | 1 thread s | " << s.threads << " threads s | speedup |\n|---|---:|---:|---:|\n";
+        for (const ThreadSpeedup& t : s.speedups)
+            md << "| " << t.stage << " | " << stageSecs(t.oneThreadSeconds) << " | " << stageSecs(t.allThreadsSeconds) << " | "
+               << fmt("%.2f×", t.speedup) << " |\n";
+        md << '\n';
+    }
+    md << "Each stage's time against its work between consecutive runs (voxels for the voxel stages, whose cones per "
+          "voxel or gather point the settings fix; covered texels for lightmaps; pixels for images): exponent "
+          "log(t₂/t₁) / log(w₂/w₁), 1 for a stage that scales with its work; **flagged** above "
+       << fmt("%g", kGrowthExponentLimit) << ", and the bounces and the gather below " << fmt("%.0f%%", 100.0 * kThreadEfficiencyTarget)
+       << " parallel efficiency:\n\n";
+    for (const ScalingFinding& f : s.findings) md << "- " << (f.flagged ? "**flagged** " : "") << f.text << '\n';
+    for (const std::string& note : s.notes) md << "- " << note << '\n';
+    md << '\n';
+    return md.str();
+}
+
 void writeMarkdown(BenchResult& r, const BenchOptions& options, const std::string& headlineText,
                    const std::vector<HeatMap>& maps) {
     std::ostringstream md;
@@ -450,6 +580,7 @@ void writeMarkdown(BenchResult& r, const BenchOptions& options, const std::strin
     }
     for (const std::string& note : r.notes) md << "- " << note << '\n';
     if (!r.notes.empty()) md << '\n';
+    if (r.scaling) md << scalingMarkdown(*r.scaling, options);
     if (!options.commandLine.empty()) md << "Regenerate with `" << options.commandLine << "`.\n";
     writeText(fs::path(r.outputDir) / "bench.md", md.str());
     r.files.push_back("bench.md");

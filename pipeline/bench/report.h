@@ -3,8 +3,10 @@
 // (gnuplot: wall time against relative RMSE on log axes, lightmap and image, each method's
 // Pareto front drawn as a line), heatmaps/ (per-texel / per-pixel relative error, EXR and a
 // colour PNG, for the VCT default and each other method's point nearest its error) and
-// bench.md (a README-ready section embedding them, with the headline figures). They name
-// files as displayPath does (display_path.h): never by this machine's absolute paths.
+// bench.md (a README-ready section embedding them, with the headline figures: the VCT
+// default's lightmap and image against each other method at equal error). With the stage
+// scaling (scaling.h), bench.json has "scaling" and bench.md "How the stages scale". They
+// name files as displayPath does (display_path.h): never by this machine's absolute paths.
 #pragma once
 
 #include "bench/run.h"

@@ -1,6 +1,7 @@
 #include "bench/run.h"
 
 #include "bench/cycles_peer.h"
+#include "bench/process_stats.h"
 #include "bench/report.h"
 #include "bench/traced_scene.h"
 #include "core/error.h"
@@ -9,13 +10,11 @@
 #include <tbb/info.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
-#include <sys/resource.h>
 
 namespace vl {
 namespace fs = std::filesystem;
@@ -25,36 +24,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
-
-// The peak resident set size of one point: Linux resets the high-water mark when "5" is
-// written to /proc/self/clear_refs; VmHWM in /proc/self/status is the mark since then.
-bool resetPeakMemory() {
-    std::ofstream out("/proc/self/clear_refs");
-    out << "5";
-    out.flush();
-    return static_cast<bool>(out);
-}
-
-double peakMemoryBytes() {
-    std::ifstream status("/proc/self/status");
-    std::string line;
-    while (std::getline(status, line))
-        if (line.rfind("VmHWM:", 0) == 0) {
-            std::istringstream in(line.substr(6));
-            double kib = 0.0;
-            in >> kib;
-            return kib * 1024.0;
-        }
-    rusage usage{};
-    getrusage(RUSAGE_SELF, &usage);
-    return usage.ru_maxrss * 1024.0;
-}
-
-double cpuSeconds() {
-    rusage usage{};
-    getrusage(RUSAGE_SELF, &usage);
-    return usage.ru_utime.tv_sec + usage.ru_stime.tv_sec + 1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-}
 
 double median(std::vector<double> v) {
     if (v.empty()) return 0.0;
@@ -201,24 +170,25 @@ std::vector<BenchPointSpec> benchSweep(bool full) {
         for (const std::string& v : values) vct(name + "=" + v, {{name, v}});
     };
     vct("default", {});
+    // The settings that move the default's time or error most: voxel resolution, where and
+    // how often the final gather runs, and the bounces.
     if (full) {
         each("resolution", {"32", "64", "96", "192", "256"});
         each("cones", {"6", "16"});
-        each("aperture", {"15", "30", "45"});
-        each("step-factor", {"0.25", "1"});
-        each("cone-offset", {"0.75", "3"});
+        each("step-factor", {"1"});
         each("normal-weights", {"lambert", "villegas"});
-        each("bounces", {"0", "1", "2", "4"});
-        each("bounce-cones", {"16"});
-        vct("resolution=64 cones=16", {{"resolution", "64"}, {"cones", "16"}});
-        vct("resolution=64 cones=16 step-factor=1", {{"resolution", "64"}, {"cones", "16"}, {"step-factor", "1"}});
+        each("bounces", {"0", "2", "4"});
+        each("gather-level", {"-1", "2"});  // -1: every receiver sample gathers its own cones (slower)
+        each("gather-turns", {"1"});
+        each("bounce-gather-level", {"2"});
+        each("voxel-emitter-strata", {"2"});
     } else {
         each("resolution", {"64", "192"});
-        each("cones", {"16"});
-        each("step-factor", {"1"});
+        each("gather-turns", {"1"});
+        each("gather-level", {"2"});
         each("bounces", {"2"});
-        vct("resolution=64 cones=16", {{"resolution", "64"}, {"cones", "16"}});
     }
+    vct("resolution=64 gather-turns=1", {{"resolution", "64"}, {"gather-turns", "1"}});  // the fast end
     const std::vector<int> spp = full ? std::vector<int>{4, 16, 64, 256, 1024} : std::vector<int>{16, 64, 256};
     for (int s : spp) points.push_back({"path", "spp=" + std::to_string(s), {}, s});
     return points;
@@ -285,6 +255,15 @@ BenchResult runBench(const BenchOptions& options) {
                                                                [&](BenchPointResult& q, const fs::path& dir, const std::string& lm,
                                                                    const std::string& im) { comparer.fromFiles(q, dir, lm, im); });
         for (BenchPointResult& p : files) result.points.push_back(std::move(p));
+    }
+    if (options.scaling) {
+        try {
+            StageScalingAxes axes = options.scalingAxes;
+            axes.repeatLimitSeconds = options.repeatLimitSeconds;
+            result.scaling = runStageScaling(options.base, options.quiet, axes);
+        } catch (const std::exception& e) {
+            result.notes.push_back(std::string("no stage scaling: ") + e.what());
+        }
     }
     writeBenchOutputs(result, options);
     return result;

@@ -9,12 +9,17 @@
 // receivers, shading, EXR writes; no grids file); its lightmap time is the bake without the
 // image stage and its image time the bake without the lightmap stage. A path-tracer point
 // times load + BVH + receivers + tracing the same way.
+//
+// With options.scaling it then times how each stage scales with voxel and lightmap
+// resolution and threads (scaling.h), reported with the rest.
 #pragma once
 
 #include "bake/bake_job.h"
 #include "bench/reference.h"
+#include "bench/scaling.h"
 #include "metrics/metrics.h"
 
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -65,6 +70,10 @@ struct BenchOptions {
     // Precomputed Cycles results (lower-spp files of ../shared/reference with their timings),
     // added as method "cycles-files" points.
     std::string cyclesFilesDir;
+    // After the points: how the stages scale with voxel and lightmap resolution and threads
+    // (scaling.h), baked from `base`.
+    bool scaling = false;
+    StageScalingAxes scalingAxes;
     bool plot = true;
     bool quiet = false;
     std::string commandLine;  // how to regenerate the run, quoted in the report
@@ -77,12 +86,13 @@ struct BenchResult {
     std::vector<BenchPointResult> points;
     std::vector<std::string> notes;  // what was skipped and why (no Blender, no gnuplot, …)
     std::vector<std::string> files;  // written, relative to outputDir
+    std::optional<StageScaling> scaling;  // when options.scaling and the scene loaded
     int threads = 0;
     int repeats = 0;
 };
 
-// The default sweep (VCT default, one setting varied at a time; path tracer 16..256 spp), or
-// the full one (more values per setting, path tracer to 1024 spp).
+// The default sweep (VCT default, one setting varied at a time, one fast point; path tracer
+// 16..256 spp), or the full one (more settings and values, path tracer to 1024 spp).
 std::vector<BenchPointSpec> benchSweep(bool full);
 
 BenchResult runBench(const BenchOptions& options);

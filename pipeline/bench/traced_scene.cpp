@@ -1,7 +1,6 @@
 #include "bench/traced_scene.h"
 
 #include "core/diagnostics.h"
-#include "scene/gltf_loader.h"
 
 #include <cmath>
 
@@ -9,10 +8,7 @@ namespace vl {
 
 BenchTraceScene loadBenchTraceScene(const BakeJob& job) {
     BenchTraceScene s;
-    LoadOptions options;
-    options.strict = job.settings.strict;
-    s.scene = loadGltf(job.scenePath, options);
-    addJobLightsAndCameras(job, s.scene);
+    s.scene = loadJobScene(job);
     s.triangles = gatherTriangles(s.scene);
     s.bvh = Bvh::build(s.triangles);
     s.trace = TraceScene::build(s.scene, s.triangles);

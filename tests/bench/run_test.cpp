@@ -8,6 +8,7 @@
 #include "bench/run.h"
 #include "core/error.h"
 #include "support/paths.h"
+#include "tiny_job.h"
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
@@ -17,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <set>
 #include <sstream>
 
 using namespace vl;
@@ -24,17 +26,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-BakeJob tinyJob(const std::string& output) {
-    BakeJob job;
-    job.scenePath = test::sourceDir() + "/scenes/cornell_box.gltf";
-    job.outputDir = output;
-    for (const auto& [name, value] : std::vector<std::pair<std::string, std::string>>{
-             {"resolution", "16"}, {"lightmap-res", "32"}, {"lightmap-subsamples", "2"}, {"width", "24"},
-             {"height", "24"}, {"image-subsamples", "1"}, {"emitter-strata", "2"}, {"voxel-emitter-strata", "1"}})
-        applySetting(bakeSettingsTable(), job.settings, name, value);
-    job.settings.quiet = true;
-    return job;
-}
+using test::tinyJob;
 
 BenchReferenceSettings tinyReference(const std::string& cache) {
     BenchReferenceSettings s;
@@ -133,7 +125,37 @@ TEST_CASE("A tiny bench run writes bench.csv with the declared columns and finit
         INFO(file);
         CHECK(fs::exists(fs::path(out) / file));
     }
-    CHECK(readText(fs::path(out) / "bench.md").find("| vct | cones=6 |") != std::string::npos);
+    const std::string md = readText(fs::path(out) / "bench.md");
+    CHECK(md.find("| vct | cones=6 |") != std::string::npos);
+    // The headline compares the path tracer with the VCT default on both outputs.
+    const nlohmann::json headline = nlohmann::json::parse(readText(fs::path(out) / "bench.json"))["headline"];
+    for (const char* output : {"lightmap", "image"}) {
+        INFO(output);
+        CHECK(headline["vct_default"][std::string(output) + "_seconds"].get<double>() > 0.0);
+        CHECK(headline["path"][output]["seconds_to_reach_vct_error"].get<double>() > 0.0);
+        CHECK(md.find(std::string("at equal ") + output + " error") != std::string::npos);
+    }
+    CHECK(md.find("How the stages scale") == std::string::npos);  // options.scaling is off
+}
+
+TEST_CASE("Every point of the bench sweeps is a valid bake setting, labelled once", "[bench]") {
+    for (bool full : {false, true}) {
+        INFO("full " << full);
+        const std::vector<BenchPointSpec> sweep = benchSweep(full);
+        std::set<std::string> labels;
+        for (const BenchPointSpec& p : sweep) {
+            INFO(p.method << " " << p.label);
+            CHECK(labels.insert(p.method + " " + p.label).second);
+            if (p.method != "vct") continue;
+            BakeSettings settings;
+            for (const auto& [name, value] : p.settings) CHECK_NOTHROW(applySetting(bakeSettingsTable(), settings, name, value));
+            CHECK_NOTHROW(validateBakeSettings(settings));
+        }
+        CHECK(labels.count("vct default"));
+        CHECK(labels.count("vct gather-turns=1"));
+        CHECK(labels.count("vct resolution=64 gather-turns=1"));
+        CHECK(labels.count("vct gather-level=-1") == (full ? 1u : 0u));
+    }
 }
 
 TEST_CASE("Bench reports name a file relative to the repository, ../shared or the bench folder", "[bench]") {

@@ -40,6 +40,8 @@ struct BenchCliOptions {
     bool noCyclesFiles = false;
     bool noPlot = false;
     bool quiet = false;
+    bool scaling = false;    // --scaling: even when --methods leaves out vct
+    bool noScaling = false;
     std::vector<std::string> methods;  // empty = all
     std::string commandLine;
 };
@@ -111,6 +113,9 @@ BenchOptions plan(const BenchCliOptions& o) {
     options.blender = o.blender;
     options.cyclesScript = std::string(VOXLIGHT_SOURCE_DIR) + "/tools/bench/cycles_bake.py";
     options.cyclesSpp = o.cyclesSpp;
+    // The stage scaling is about the VCT bake: on unless the run leaves the bake out.
+    const bool vctWanted = o.methods.empty() || std::find(o.methods.begin(), o.methods.end(), "vct") != o.methods.end();
+    options.scaling = o.scaling || (!o.noScaling && vctWanted);
     options.plot = !o.noPlot;
     options.quiet = o.quiet;
     options.commandLine = o.commandLine;
@@ -178,7 +183,7 @@ void addBenchCommand(CLI::App& app) {
     auto o = std::make_shared<BenchCliOptions>();
     auto* cmd = app.add_subcommand(
         "bench", "speed against error: VCT settings, path-tracer spp (and Cycles when Blender is installed) against one "
-                 "reference; writes bench.csv, bench.json, bench.png, heat maps and bench.md");
+                 "reference, then how each bake stage scales; writes bench.csv, bench.json, bench.png, heat maps and bench.md");
     cmd->add_option("input", o->input,
                     "scene (.gltf, .glb) or job file (.json: its first scene and settings); default: the Cycles Cornell "
                     "quad of ../shared/reference, else scenes/cornell_box.gltf");
@@ -209,6 +214,11 @@ void addBenchCommand(CLI::App& app) {
     cmd->add_option("--cycles-spp", o->cyclesSpp, "Cycles peer spp points (default 16 64 256)");
     cmd->add_flag("--no-cycles-files", o->noCyclesFiles, "leave out the precomputed lower-spp Cycles files");
     cmd->add_option("--methods", o->methods, "only these methods: vct path cycles (default all)")->delimiter(',');
+    auto* scaling = cmd->add_flag("--scaling", o->scaling,
+                                  "time every stage against voxel resolution 64/128/256, lightmap resolution "
+                                  "256/512/1024 and 1 thread against all, each the fastest of 3 bakes (default: on unless --methods "
+                                  "leaves out vct)");
+    cmd->add_flag("--no-scaling", o->noScaling, "leave out the stage scaling")->excludes(scaling);
     cmd->add_flag("--no-plot", o->noPlot, "write the gnuplot script and data but do not run gnuplot");
     cmd->add_flag("-q,--quiet", o->quiet, "no progress or table output");
     for (const auto& spec : bakeSettingsTable()) {
