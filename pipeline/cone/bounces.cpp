@@ -38,26 +38,39 @@ void checkChannels(const VoxelScene& voxels) {
 std::vector<FaceRadiance> litFaces(const VoxelScene& voxels) {
     if (!voxels.faceRadiance.empty()) return voxels.faceRadiance;
     std::vector<FaceRadiance> faces(voxels.size());
-    for (size_t i = 0; i < voxels.size(); ++i)
+    tbb::parallel_for(size_t(0), voxels.size(), [&](size_t i) {
         for (size_t f = 0; f < 6; ++f) faces[i][f] = voxels.axisWeights[i][f] > 0.0f ? voxels.radiance[i] : vec3(0.0f);
+    });
     return faces;
 }
 
 std::vector<vec3> isotropic(const VoxelScene& voxels, const std::vector<FaceRadiance>& faces) {
     std::vector<vec3> radiance(faces.size());
-    for (size_t i = 0; i < faces.size(); ++i)
+    tbb::parallel_for(size_t(0), faces.size(), [&](size_t i) {
         radiance[i] = faceWeightedMean(faces[i].data(), voxels.axisWeights[i].data());
+    });
     return radiance;
 }
 
 // Σ over faces of axis weight × (r + g + b) of a − b: how much light one bounce added.
+// Summed in fixed chunks, each in order, and the chunks in order: the same double at any
+// thread count (the tail's ratio, and so the bake's bytes, depend on it).
 double addedLight(const VoxelScene& voxels, const std::vector<FaceRadiance>& a, const std::vector<FaceRadiance>& b) {
+    constexpr size_t kChunkVoxels = 4096;
+    const size_t chunks = (voxels.size() + kChunkVoxels - 1) / kChunkVoxels;
+    std::vector<double> partial(chunks, 0.0);
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+        double sum = 0.0;
+        const size_t last = std::min(voxels.size(), (c + 1) * kChunkVoxels);
+        for (size_t i = c * kChunkVoxels; i < last; ++i)
+            for (size_t f = 0; f < 6; ++f) {
+                const vec3 d = a[i][f] - b[i][f];
+                sum += double(voxels.axisWeights[i][f]) * double(d.x + d.y + d.z);
+            }
+        partial[c] = sum;
+    });
     double sum = 0.0;
-    for (size_t i = 0; i < voxels.size(); ++i)
-        for (size_t f = 0; f < 6; ++f) {
-            const vec3 d = a[i][f] - b[i][f];
-            sum += double(voxels.axisWeights[i][f]) * double(d.x + d.y + d.z);
-        }
+    for (double p : partial) sum += p;
     return sum;
 }
 
