@@ -10,38 +10,64 @@ size_t dilatePadding(Image& image, const Image& mask, int passes) {
     if (mask.width != image.width || mask.height != image.height || mask.channels < 1)
         throw Error("dilatePadding: the mask is not the image's size");
     const int W = image.width, H = image.height, C = image.channels;
-    std::vector<uint8_t> filled(static_cast<size_t>(W) * H);
-    for (size_t i = 0; i < filled.size(); ++i) filled[i] = mask.pixels[i * mask.channels] > 0.5f ? 1 : 0;
-    size_t total = 0;
-    std::vector<size_t> ring;
-    std::vector<float> values;
-    for (int pass = 0; passes < 0 || pass < passes; ++pass) {
-        ring.clear();
-        values.clear();
-        for (int y = 0; y < H; ++y)
-            for (int x = 0; x < W; ++x) {
-                const size_t i = static_cast<size_t>(y) * W + x;
-                if (filled[i]) continue;
-                std::vector<double> sum(static_cast<size_t>(C), 0.0);
-                int count = 0;
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dx = -1; dx <= 1; ++dx) {
-                        const int nx = x + dx, ny = y + dy;
-                        if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= W || ny >= H) continue;
-                        if (!filled[static_cast<size_t>(ny) * W + nx]) continue;
-                        for (int c = 0; c < C; ++c) sum[static_cast<size_t>(c)] += image.at(nx, ny, c);
-                        ++count;
-                    }
-                if (count == 0) continue;
-                ring.push_back(i);
-                for (int c = 0; c < C; ++c) values.push_back(static_cast<float>(sum[static_cast<size_t>(c)] / count));
+    const size_t texels = static_cast<size_t>(W) * H;
+    std::vector<uint8_t> filled(texels);
+    for (size_t i = 0; i < texels; ++i) filled[i] = mask.pixels[i * mask.channels] > 0.5f ? 1 : 0;
+
+    // A pass fills exactly the unfilled texels next to a filled one, and those lie next to
+    // what the pass before filled (else an earlier pass would have taken them): each pass
+    // looks only there, so the whole dilation costs one visit per texel and its neighbours,
+    // not one sweep of the image per pass (at 1024² the sweeps took 17% of a bake).
+    const auto visitNeighbours = [&](size_t i, auto&& visit) {
+        const int x = static_cast<int>(i % static_cast<size_t>(W)), y = static_cast<int>(i / static_cast<size_t>(W));
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                const int nx = x + dx, ny = y + dy;
+                if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= W || ny >= H) continue;
+                visit(static_cast<size_t>(ny) * W + nx, nx, ny);
             }
-        if (ring.empty()) break;
+    };
+    std::vector<uint8_t> queued(texels, 0);
+    std::vector<size_t> ring;
+    for (size_t i = 0; i < texels; ++i) {
+        if (filled[i]) continue;
+        bool nextToFilled = false;
+        visitNeighbours(i, [&](size_t j, int, int) { nextToFilled = nextToFilled || filled[j]; });
+        if (nextToFilled) {
+            ring.push_back(i);
+            queued[i] = 1;
+        }
+    }
+
+    size_t total = 0;
+    std::vector<float> values;
+    std::vector<double> sum(static_cast<size_t>(C));
+    std::vector<size_t> next;
+    for (int pass = 0; (passes < 0 || pass < passes) && !ring.empty(); ++pass) {
+        values.clear();
+        for (size_t i : ring) {
+            std::fill(sum.begin(), sum.end(), 0.0);
+            int count = 0;
+            visitNeighbours(i, [&](size_t j, int nx, int ny) {
+                if (!filled[j]) return;
+                for (int c = 0; c < C; ++c) sum[static_cast<size_t>(c)] += image.at(nx, ny, c);
+                ++count;
+            });
+            for (int c = 0; c < C; ++c) values.push_back(static_cast<float>(sum[static_cast<size_t>(c)] / count));
+        }
         for (size_t k = 0; k < ring.size(); ++k) {
             filled[ring[k]] = 1;
             for (int c = 0; c < C; ++c) image.pixels[ring[k] * C + static_cast<size_t>(c)] = values[k * C + static_cast<size_t>(c)];
         }
         total += ring.size();
+        next.clear();
+        for (size_t i : ring)
+            visitNeighbours(i, [&](size_t j, int, int) {
+                if (filled[j] || queued[j]) return;
+                queued[j] = 1;
+                next.push_back(j);
+            });
+        ring.swap(next);
     }
     return total;
 }
