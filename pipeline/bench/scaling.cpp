@@ -72,8 +72,7 @@ StageScalingRun bakeRun(const Scene& scene, const BakeJob& base, int resolution,
                 for (const BakedImage& image : result.images)
                     run.pixels += static_cast<size_t>(image.beauty.width) * image.beauty.height;
             }
-            double total = 0.0;
-            for (const StageTime& t : result.stages) total += t.seconds;
+            const double total = totalSeconds(result.stages);
             if (r == 0 || total < fastestTotal) {
                 fastestTotal = total;
                 run.cpuSeconds = cpuUsed;
@@ -206,18 +205,9 @@ void analyseThreads(StageScaling& s, const std::vector<std::string>& stages) {
 
 }  // namespace
 
-double StageScalingRun::stageSeconds(const std::string& stage) const {
-    double s = 0.0;
-    for (const StageTime& t : stages)
-        if (t.stage == stage) s += t.seconds;
-    return s;
-}
+double StageScalingRun::stageSeconds(const std::string& stage) const { return vl::stageSeconds(stages, stage); }
 
-double StageScalingRun::totalSeconds() const {
-    double s = 0.0;
-    for (const StageTime& t : stages) s += t.seconds;
-    return s;
-}
+double StageScalingRun::totalSeconds() const { return vl::totalSeconds(stages); }
 
 std::string stageWork(const std::string& stage) {
     if (stage == "voxelize" || stage == "voxel light" || stage == "bounces" || stage == "mips" || stage == "gather")
@@ -315,7 +305,12 @@ StageScaling runStageScaling(const BakeJob& base, bool quiet, const StageScaling
     };
     for (int r : sortedUnique(axes.resolutions)) s.resolutionAxis.push_back(runIndex(r, baseLightmap));
     for (int l : sortedUnique(axes.lightmapResolutions)) s.lightmapAxis.push_back(runIndex(baseResolution, l));
-    if (axes.threads && s.threads > 1) s.oneThread = bakeRun(scene, base, baseResolution, baseLightmap, 1, axes, quiet);
+    if (axes.threads && s.threads > 1) {
+        // The all-threads bake the one-thread one is compared with (an extra run when the
+        // job's own values are on neither axis).
+        runIndex(baseResolution, baseLightmap);
+        s.oneThread = bakeRun(scene, base, baseResolution, baseLightmap, 1, axes, quiet);
+    }
     analyseStageScaling(s);
     if (base.settings.voxel.voxelSize > 0.0)
         s.notes.push_back("the job's voxel-size is left out: the runs set resolution (base " + std::to_string(baseResolution) + ")");
