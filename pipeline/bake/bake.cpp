@@ -107,6 +107,19 @@ void checkMemoryBudget(const Scene& scene, const BakeSettings& settings, double 
                             " is available: lower resolution, lightmap-res or the image size");
 }
 
+double stageSeconds(const std::vector<StageTime>& stages, const std::string& stage) {
+    double seconds = 0.0;
+    for (const StageTime& t : stages)
+        if (t.stage == stage) seconds += t.seconds;
+    return seconds;
+}
+
+double totalSeconds(const std::vector<StageTime>& stages) {
+    double seconds = 0.0;
+    for (const StageTime& t : stages) seconds += t.seconds;
+    return seconds;
+}
+
 BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnostics) {
     validateBakeSettings(settings);
     const double voxelSize = voxelSizeFor(scene, settings.voxel);

@@ -24,6 +24,10 @@ struct StageTime {
     double seconds = 0.0;
 };
 
+// The seconds of the stages named `stage` (0 when there is none) and of all of them.
+double stageSeconds(const std::vector<StageTime>& stages, const std::string& stage);
+double totalSeconds(const std::vector<StageTime>& stages);
+
 struct BakedLightmap {
     std::string name;  // the atlas name ("lightmap" for the shared atlas)
     Image total;       // RGB E/π, padding dilated

@@ -18,11 +18,7 @@
 namespace vl {
 namespace fs = std::filesystem;
 
-double BakeReport::totalSeconds() const {
-    double total = 0.0;
-    for (const StageTime& s : stages) total += s.seconds;
-    return total;
-}
+double BakeReport::totalSeconds() const { return vl::totalSeconds(stages); }
 
 namespace {
 

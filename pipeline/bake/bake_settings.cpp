@@ -69,11 +69,11 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
         {"bounce-tail", "add the rest of the bounce series as a geometric tail after the last bounce (default true)",
          [](S& s, const std::string& v) { s.bounceTail = parseBoolSetting("bounce-tail", v); }},
         {"gather-level", "receivers interpolate irradiance gathered once per surface side of each block of 2^n voxels; -1: every sample gathers its own cones (default 3)",
-         [](S& s, const std::string& v) { s.gatherLevel = parseIntSetting("gather-level", v, -1, 16); }},
+         [](S& s, const std::string& v) { s.gatherLevel = parseIntSetting("gather-level", v, -1, kMaxCacheLevel); }},
         {"gather-turns", "cone sets traced per gather point of the final gather, each turned by 1/n turn (default 2)",
          [](S& s, const std::string& v) { s.gatherTurns = parseIntSetting("gather-turns", v, 1, kMaxGatherTurns); }},
         {"bounce-gather-level", "voxels interpolate bounce light gathered once per surface side of each block of 2^n voxels (default 3)",
-         [](S& s, const std::string& v) { s.bounceGatherLevel = parseIntSetting("bounce-gather-level", v, 0, 16); }},
+         [](S& s, const std::string& v) { s.bounceGatherLevel = parseIntSetting("bounce-gather-level", v, 0, kMaxCacheLevel); }},
         // Receivers
         {"lightmap-res", "lightmap atlas width and height in texels (default 256)",
          [](S& s, const std::string& v) {
@@ -117,13 +117,15 @@ void validateBakeSettings(const BakeSettings& s) {
     if (s.voxel.voxelSize < 0.0 || !std::isfinite(s.voxel.voxelSize))
         throw SettingsError("setting voxel-size = " + real(s.voxel.voxelSize) + " must be positive and finite");
     if (s.bounces < 0 || s.bounces > 1024) throw SettingsError("setting bounces = " + std::to_string(s.bounces) + " is outside 0..1024");
-    if (s.gatherLevel < -1 || s.gatherLevel > 16)
-        throw SettingsError("setting gather-level = " + std::to_string(s.gatherLevel) + " is outside -1..16");
+    if (s.gatherLevel < -1 || s.gatherLevel > kMaxCacheLevel)
+        throw SettingsError("setting gather-level = " + std::to_string(s.gatherLevel) + " is outside -1.." +
+                            std::to_string(kMaxCacheLevel));
     if (s.gatherTurns < 1 || s.gatherTurns > kMaxGatherTurns)
         throw SettingsError("setting gather-turns = " + std::to_string(s.gatherTurns) + " is outside 1.." +
                             std::to_string(kMaxGatherTurns));
-    if (s.bounceGatherLevel < 0 || s.bounceGatherLevel > 16)
-        throw SettingsError("setting bounce-gather-level = " + std::to_string(s.bounceGatherLevel) + " is outside 0..16");
+    if (s.bounceGatherLevel < 0 || s.bounceGatherLevel > kMaxCacheLevel)
+        throw SettingsError("setting bounce-gather-level = " + std::to_string(s.bounceGatherLevel) + " is outside 0.." +
+                            std::to_string(kMaxCacheLevel));
     if (s.direct.emitterStrata < 1 || s.direct.emitterStrata > 64)
         throw SettingsError("setting emitter-strata = " + std::to_string(s.direct.emitterStrata) + " is outside 1..64");
 }

@@ -32,13 +32,6 @@ double median(std::vector<double> v) {
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-double stageSeconds(const BakeReport& report, const std::string& name) {
-    double s = 0.0;
-    for (const StageTime& t : report.stages)
-        if (t.stage == name) s += t.seconds;
-    return s;
-}
-
 std::string fileSafe(const std::string& text) {
     std::string out;
     for (char c : text) out += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '.') ? c : '_';
@@ -109,8 +102,8 @@ void runVctPoint(const BenchOptions& options, const Comparer& comparer, BenchPoi
         p.cpuRuns.push_back(cpuSeconds() - cpu);
         if (!report.ok) throw Error(report.error);
         const double total = report.totalSeconds();
-        if (job.settings.outputs.lightmaps) p.lightmapRuns.push_back(total - stageSeconds(report, "images"));
-        if (job.settings.outputs.images) p.imageRuns.push_back(total - stageSeconds(report, "lightmaps"));
+        if (job.settings.outputs.lightmaps) p.lightmapRuns.push_back(total - stageSeconds(report.stages, "images"));
+        if (job.settings.outputs.images) p.imageRuns.push_back(total - stageSeconds(report.stages, "lightmaps"));
         if (r == 0 && total > options.repeatLimitSeconds) break;
     }
     comparer.fromFiles(p, job.outputDir, "lightmap", imageStemOf(report));

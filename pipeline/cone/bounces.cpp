@@ -141,8 +141,9 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
         throw SettingsError("bounces = " + std::to_string(bounces) + " is outside [0, " +
                             std::to_string(kMaxBounces) + "]");
     checkChannels(voxels);
-    IrradianceCache cache(voxels, gatherLevel);
+    IrradianceCache::checkLevel(gatherLevel);
     if (bounces == 0 || voxels.size() == 0) return;
+    IrradianceCache cache(voxels, gatherLevel);
 
     const ConeSet& set = coneSet(settings.coneCount);
     const std::vector<FaceRadiance> lit = litFaces(voxels);

@@ -20,7 +20,8 @@
 // axis weights has no surface: it gathers and shows nothing. Why gather points: bounce
 // light is smooth, and the Cycles Cornell boxes show the same lightmap error with the
 // bounces gathered at level-3 points as at every voxel (quad 5.82% / 5.84%, point 7.56% /
-// 7.62%) in a thirtieth of the time (0.3 s against 11 s on 2 cores).
+// 7.62%) in a thirtieth of the time (0.3 s against 11 s on 2 cores: the bounces stage in
+// bake.json of `build/voxlight bake ../shared/reference/cornell_quad.gltf`, before and after).
 //
 // Without faceRadiance (a scene lit elsewhere, synthetic tests) every face with a surface
 // starts from `radiance`.

@@ -18,7 +18,6 @@ namespace vl {
 
 namespace {
 
-constexpr int kMaxCacheLevel = 16;
 constexpr int kCoordLimit = 1 << 20;  // as radiance_mips.cpp: coordinates within ±2^20
 
 // A voxel side, keyed by its cell and face class; sorted by key, then by voxel, so the
@@ -41,9 +40,13 @@ struct Side {
 
 }  // namespace
 
-IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level) : level_(level), voxelSize_(voxels.voxelSize) {
+void IrradianceCache::checkLevel(int level) {
     if (level < 0 || level > kMaxCacheLevel)
         throw SettingsError("gather level " + std::to_string(level) + " is outside 0.." + std::to_string(kMaxCacheLevel));
+}
+
+IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level) : level_(level), voxelSize_(voxels.voxelSize) {
+    checkLevel(level);
     const size_t n = voxels.size();
     if (voxels.normal.size() != n || voxels.axisWeights.size() != n)
         throw Error("IrradianceCache(" + voxels.sourceScene + "): normals or axis weights do not match the " +

@@ -56,7 +56,9 @@ struct LightingSettings {
     // shape penumbrae. One suffices by default: the voxel light feeds only the bounces (the
     // receivers' direct light is traced exactly), whose gather blurs penumbrae anyway. On the
     // Cycles quad box n = 1, 2, 3 give lightmap 6.07%, 6.16%, 6.24% relative RMSE and take
-    // 0.12, 0.39, 0.83 s (2 cores).
+    // 0.12, 0.39, 0.83 s in the voxel light stage (2 cores; errors from `build/voxlight bench
+    // --methods vct --vct 'voxel-emitter-strata=N'`, times from the bake.json of `build/voxlight
+    // bake ../shared/reference/cornell_quad.gltf --voxel-emitter-strata N`).
     int emitterStrata = 1;
     // false: V = 0 everywhere (unshadowed lighting; the benchmark's "no stepping" peer).
     bool visibility = true;
