@@ -40,13 +40,15 @@ const BakedLightmap& lightmapNamed(const BakeResult& result, const std::string& 
     return result.lightmaps.front();
 }
 
-double coveredMean(const BakedLightmap& l) {
+// The mean over a lightmap's covered texels of (r + g + b) / 3 of `image` (its total by default).
+double coveredMean(const BakedLightmap& l, const Image* image = nullptr) {
+    const Image& values = image ? *image : l.total;
     double sum = 0.0;
     size_t n = 0;
     for (int y = 0; y < l.mask.height; ++y)
         for (int x = 0; x < l.mask.width; ++x)
             if (l.mask.at(x, y) > 0.5f) {
-                const vec3 v = l.total.rgb(x, y);
+                const vec3 v = values.rgb(x, y);
                 sum += (v.x + v.y + v.z) / 3.0;
                 ++n;
             }
@@ -144,16 +146,19 @@ TEST_CASE("Light does not leak through a wall between a lit and a dark room", "[
     }
 }
 
-TEST_CASE("Cones do not create energy in a closed white box", "[bake]") {
+TEST_CASE("A closed white box's indirect power stays within the mip alignment error of energy conservation",
+          "[bake]") {
     // Energy conservation: the emitted power Φ bounces with albedo ρ, so Σ over surfaces of
     // E_indirect·A is Φ·ρ/(1−ρ) when every bounce reaches some surface (the emitter's black
     // back takes a little: the exact value lies just under). E/π per texel, area-weighted.
     // A cone reads walls through the mip hierarchy, and what a coarse voxel holds depends on
     // where the wall falls inside it: with 47 voxels across this box the walls sit in the
-    // last voxel of their level-3 cells, with 49 in the first, and the indirect power moves
-    // from +6% to −12% of the exact value (bounce-tail on; one gather: +4% / −4%). That is
-    // the method's error, bounded here; averaged over the two alignments it must not exceed
-    // the exact value.
+    // last voxel of their level-3 cells, with 49 in the first. Measured (2026-11-24), the
+    // indirect power is then 1.058 and 0.879 of the exact value (bounce-tail on; a single
+    // gather: +4% / −4%), their mean 0.968: cones do create energy at one alignment. The
+    // bounds are those measurements with 2–3 points to spare, so that a change which widens
+    // the alignment error, or tilts both alignments brighter (the mean above exact), fails;
+    // they are not a derived limit.
     Scene scene;
     scene.sourcePath = "white box (test)";
     constexpr float rho = 0.7f;
@@ -175,18 +180,8 @@ TEST_CASE("Cones do not create energy in a closed white box", "[bake]") {
         settings.bounces = 8;
         Diagnostics diagnostics(false, false);
         const BakeResult result = bake(scene, settings, diagnostics);
-        double indirectPower = 0.0;  // Σ_faces mean(E/π)·π·area
-        for (const BakedLightmap& l : result.lightmaps) {
-            double sum = 0.0;
-            size_t n = 0;
-            for (int y = 0; y < l.mask.height; ++y)
-                for (int x = 0; x < l.mask.width; ++x)
-                    if (l.mask.at(x, y) > 0.5f) {
-                        sum += l.indirect.rgb(x, y).x;
-                        ++n;
-                    }
-            indirectPower += sum / static_cast<double>(n) * kPi * 1.0;  // every face is 1 m²
-        }
+        double indirectPower = 0.0;  // Σ_faces mean(E/π)·π·area, every face 1 m²
+        for (const BakedLightmap& l : result.lightmaps) indirectPower += coveredMean(l, &l.indirect) * kPi;
         INFO(resolution << " voxels: indirect power " << indirectPower << " W, exact " << exact << " W");
         CHECK(indirectPower > 0.85 * exact);
         CHECK(indirectPower < 1.08 * exact);

@@ -8,6 +8,7 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 using namespace vl;
@@ -33,15 +34,6 @@ void addFloor(SceneBuilder& builder, int x0, int x1, int n, bool twoSided = fals
         for (int z = 0; z < n; ++z) builder.add(ivec3(x, 0, z), surface(vec3(0, 1, 0), twoSided));
 }
 
-IrradianceCacheView linked(IrradianceCache& cache, const RadianceMips& mips) {
-    cache.link(mips.view());
-    return cache.view(mips.view());
-}
-
-VoxelScene lit(VoxelScene scene) {
-    scene.radiance.assign(scene.size(), vec3(0.0f));
-    return scene;
-}
 
 }  // namespace
 
@@ -49,7 +41,7 @@ TEST_CASE("Gather points: one per surface side of each occupied cell, at its vox
     const double h = 0.1;
     SceneBuilder builder(h);
     addFloor(builder, 0, 16, 16);
-    const VoxelScene scene = lit(builder.build());
+    const VoxelScene scene = builder.build();
     for (int level : {0, 2, 3}) {
         INFO("level " << level);
         const IrradianceCache cache(scene, level);
@@ -71,22 +63,22 @@ TEST_CASE("Gather points: one per surface side of each occupied cell, at its vox
     // A two-sided floor has a point for each side.
     SceneBuilder twoSided(h);
     addFloor(twoSided, 0, 8, 8, true);
-    const IrradianceCache both(lit(twoSided.build()), 2);
+    const IrradianceCache both(twoSided.build(), 2);
     REQUIRE(both.points().size() == 2 * 4);
     size_t up = 0;
     for (const GatherPoint& p : both.points()) up += p.normal.y > 0.0f;
     CHECK(up == 4);
-    CHECK_THROWS_AS(IrradianceCache(lit(twoSided.build()), 17), SettingsError);
+    CHECK_THROWS_AS(IrradianceCache(twoSided.build(), 17), SettingsError);
 }
 
 TEST_CASE("Interpolation reproduces constant and linear irradiance on a plane", "[cone]") {
     const double h = 0.1;
     SceneBuilder builder(h);
     addFloor(builder, 0, 32, 32);
-    const VoxelScene scene = lit(builder.build());
+    const VoxelScene scene = builder.build();
     const RadianceMips mips = buildRadianceMips(scene);
     IrradianceCache cache(scene, 2);
-    const IrradianceCacheView view = linked(cache, mips);
+    cache.link(mips.view());
     // E = a + b·x + c·z: the points sit on a regular grid, where tents sum to one and
     // reproduce linear functions exactly.
     std::vector<vec3> linear;
@@ -108,7 +100,6 @@ TEST_CASE("Interpolation reproduces constant and linear irradiance on a plane", 
     vec3 E;
     CHECK_FALSE(interpolateIrradiance(withLinear, vec3(1.0f, 0.0f, 1.0f), vec3(0, -1, 0), E));
     CHECK_FALSE(interpolateIrradiance(withLinear, vec3(10.0f, 0.0f, 10.0f), vec3(0, 1, 0), E));
-    (void)view;
 }
 
 TEST_CASE("A wall keeps interpolation on its own side", "[cone]") {
@@ -123,7 +114,7 @@ TEST_CASE("A wall keeps interpolation on its own side", "[cone]") {
         if (wall)
             for (int y = 0; y < 8; ++y)
                 for (int z = 0; z < 16; ++z) builder.add(ivec3(16, y, z), surface(vec3(1, 0, 0), true));
-        return lit(builder.build());
+        return builder.build();
     };
     for (bool wall : {false, true}) {
         INFO((wall ? "with the wall" : "without the wall"));
@@ -136,12 +127,16 @@ TEST_CASE("A wall keeps interpolation on its own side", "[cone]") {
         cache.setIrradiance(E);
         const IrradianceCacheView view = cache.view(mips.view());
         float brightest = 0.0f;
+        int interpolated = 0;
         for (float x = 1.75f; x < 2.2f; x += 0.05f)
             for (float z = 0.2f; z < 1.4f; z += 0.1f) {
                 vec3 value;
-                if (interpolateIrradiance(view, vec3(x, 0.0f, z), vec3(0, 1, 0), value))
+                if (interpolateIrradiance(view, vec3(x, 0.0f, z), vec3(0, 1, 0), value)) {
                     brightest = std::max(brightest, value.x);
+                    ++interpolated;
+                }
             }
+        REQUIRE(interpolated > 0);  // the right floor's own points apply
         if (wall)
             CHECK(brightest == 0.0f);
         else
@@ -153,7 +148,7 @@ TEST_CASE("The sides of a two-sided sheet interpolate only their own side", "[co
     const double h = 0.1;
     SceneBuilder builder(h);
     addFloor(builder, 0, 16, 16, true);
-    const VoxelScene scene = lit(builder.build());
+    const VoxelScene scene = builder.build();
     const RadianceMips mips = buildRadianceMips(scene);
     IrradianceCache cache(scene, 2);
     cache.link(mips.view());
@@ -218,16 +213,31 @@ TEST_CASE("The gather gives the same bytes at 1 and 2 threads, and averages its 
     const std::vector<vec3> one = gather(1, 2), two = gather(2, 2);
     REQUIRE(one.size() == two.size());
     CHECK(std::memcmp(one.data(), two.data(), one.size() * sizeof(vec3)) == 0);
-    // Inside a closed box of radiance L every point gathers close to π·L whatever its turn.
+    // Two turns are the mean of the single sets turned by 0 and ½ turn.
+    IrradianceCache cache(box, 2);
+    const ConeSet& set = coneSet(32);
+    for (size_t q = 0; q < cache.points().size(); ++q) {
+        GatherPoint half = cache.points()[q];
+        half.turn += 0.5f;
+        half.turn -= std::floor(half.turn);
+        const vec3 mean = (gatherAtPoint(mips.view(), cache.points()[q], set, ConeSettings{32}, 1) +
+                           gatherAtPoint(mips.view(), half, set, ConeSettings{32}, 1)) /
+                          2.0f;
+        CHECK(glm::distance(one[q], mean) <= 1e-5f * glm::length(mean));
+    }
+    // Inside a closed box of radiance L every point gathers close to π·L, never more, whatever
+    // its turn (the gather's closed-box bound, bounces_test.cpp).
     const std::vector<vec3> single = gather(2, 1);
     for (size_t q = 0; q < one.size(); ++q) {
-        CHECK(one[q].x == Approx(kPi).epsilon(0.16));
-        CHECK(single[q].x == Approx(kPi).epsilon(0.16));
+        CHECK(one[q].x >= 0.84f * kPi);
+        CHECK(one[q].x <= kPi * (1.0f + 1e-5f));
+        CHECK(single[q].x >= 0.84f * kPi);
+        CHECK(single[q].x <= kPi * (1.0f + 1e-5f));
     }
     CHECK_THROWS_AS(gather(1, 0), SettingsError);
 }
 
-TEST_CASE("Bounces gathered at coarse points match bounces gathered at every voxel in a closed box", "[cone]") {
+TEST_CASE("Bounces gathered at coarse points keep the closed-box bound of a gather at every voxel", "[cone]") {
     // The closed-box bound of bounces_test.cpp (added light within [0.84, 1]·ρL0), with the
     // bounce gathered at level-2 points and interpolated at every voxel side.
     const vec3 l0(1.0f, 0.8f, 0.6f);
