@@ -30,7 +30,7 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
         {"texel-samples", "texture samples per axis over each voxel's surface piece (default 4)",
          [](S& s, const std::string& v) { s.voxel.texelSamples = parseIntSetting("texel-samples", v, 1, 64); }},
         // Voxel direct lighting
-        {"normal-weights", "voxel normal weighting: lambert, villegas or six-axis (default six-axis)",
+        {"normal-weights", "voxel normal weighting: lambert, villegas or six-axis (default lambert)",
          [](S& s, const std::string& v) { s.lighting.normalWeights = parseNormalWeighting(v); }},
         {"attenuation", "K_c,K_l,K_q of the paper's eq. 18 for every punctual light (default: glTF inverse square)",
          [](S& s, const std::string& v) {

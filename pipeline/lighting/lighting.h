@@ -44,7 +44,11 @@ struct AttenuationCoefficients {
 };
 
 struct LightingSettings {
-    NormalWeighting normalWeights = NormalWeighting::SixAxis;
+    // Lambert by default: it is exact on a flat surface of any orientation. Six-axis keeps a
+    // 90° corner's total but lights a tilted wall by 1/‖n‖₁ of its cosine: a turned closed
+    // room kept 70–76 % of its indirect power with it, 91–101 % with Lambert; on the
+    // axis-aligned Cycles Cornell boxes the two differ by 0.1 point (README).
+    NormalWeighting normalWeights = NormalWeighting::Lambert;
     VisibilityTraversal traversal = VisibilityTraversal::Hdda;
     // Punctual-light falloff. Unset: glTF physical inverse square with the KHR_lights_punctual
     // range window (spot lights add the extension's smooth cone falloff). Set: eq. (18) for

@@ -109,7 +109,7 @@ struct LightingView {
     const EmitterTriangle* emitters = nullptr;
     uint32_t emitterCount = 0;
     const EmitterSample* emitterSamples = nullptr;
-    int normalWeighting = kWeightSixAxis;
+    int normalWeighting = kWeightLambert;
     int visibility = 1;
 };
 

@@ -129,7 +129,7 @@ void addLightCommand(CLI::App& app) {
         ->required();
     cmd->add_option("-o,--output", options->output, "output .vdb (default: output/<scene name>_lit.vdb)");
     cmd->add_option("--normal-weights", options->normalWeights,
-                    "lambert | villegas | six-axis (default six-axis)");
+                    "lambert | villegas | six-axis (default lambert)");
     cmd->add_option("--attenuation", options->attenuation,
                     "K_c,K_l,K_q: the paper's I/(K_c + K_l r + K_q r^2) for every point and spot light "
                     "(default: glTF inverse square with the range window)");
