@@ -37,9 +37,9 @@ struct BakeSettings {
     int bounces = 8;
     int bounceCones = 6;
     // After the bounces, the rest of the series as a geometric tail (cone/bounces.h): a
-    // bright interior keeps its light for many bounces (zdm2's image error: 40.5% after 8
-    // bounces, 33.3% with the tail, 26% after 24 without; Cornell lightmaps 5.82% / 7.56% ->
-    // 5.79% / 7.47%).
+    // bright interior keeps its light for many bounces (zdm2's image error: 46.6% after 8
+    // bounces, 28.0% with the tail; `voxlight bench tools/bench/zdm2.json --vct
+    // 'bounce-tail=false'`, 2026-11-24).
     bool bounceTail = true;
     // Where indirect irradiance is gathered (cone/irradiance_cache.h): at one point per
     // surface side of each block of 2^level voxels per axis, interpolated at every texel,

@@ -53,7 +53,8 @@ VL_HOSTDEV inline void faceIrradiance(const MipView& mips, const vec3& centre, c
 // What follows the last bounce.
 enum class BounceTail {
     None,         // L_bounces: exactly that many bounces
-    Geometric,    // L_bounces plus the series' geometric tail, ΔL·r/(1 − r) (bounces.cpp)
+    Geometric,    // L_bounces plus the series' geometric tail, ΔL·r/(1 − r), r each face's own
+                  // ratio of its last two increments, capped by the scene's (bounces.cpp)
 };
 
 // Replaces voxels.faceRadiance and voxels.radiance with L_bounces (and its tail, which needs
