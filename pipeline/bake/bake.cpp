@@ -152,13 +152,16 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
         if (onGpu) return cuda::lightVoxelsCuda(scene, result.voxels, settings.lighting);
         return lightVoxels(scene, result.voxels, settings.lighting, &progress);
     });
+    RadianceMips bounced;  // the bounces' own mips, relit with their result
     timed(result.stages, "bounces", [&] {
         Progress progress("bounces", uint64_t(settings.bounces) * result.voxels.size(), settings.quiet);
         propagateBounces(result.voxels, bounceConeSettings(settings), settings.bounces, settings.bounceGatherLevel,
-                         settings.bounceTail ? BounceTail::Geometric : BounceTail::None, &progress);
+                         settings.bounceTail ? BounceTail::Geometric : BounceTail::None, &progress, &bounced);
         return 0;
     });
-    result.mips = timed(result.stages, "mips", [&] { return buildRadianceMips(result.voxels); });
+    result.mips = timed(result.stages, "mips", [&] {
+        return bounced.levelCount() > 0 ? std::move(bounced) : buildRadianceMips(result.voxels);
+    });
     const MipView mipView = result.mips.view();
     // The final gather, once for every receiver of every output.
     IrradianceCache cache;

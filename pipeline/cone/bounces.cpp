@@ -135,7 +135,7 @@ SideWeights sideWeights(const VoxelScene& voxels, const IrradianceCacheView& cac
 }  // namespace
 
 void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces, int gatherLevel,
-                      BounceTail tail, Progress* progress) {
+                      BounceTail tail, Progress* progress, RadianceMips* resultMips) {
     validateConeSettings(settings);
     if (bounces < 0 || bounces > kMaxBounces)
         throw SettingsError("bounces = " + std::to_string(bounces) + " is outside [0, " +
@@ -222,6 +222,10 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
     }
     voxels.radiance = isotropic(voxels, current);
     voxels.faceRadiance = std::move(current);
+    if (resultMips) {
+        mips.relight(voxels, voxels.radiance, voxels.faceRadiance);
+        *resultMips = std::move(mips);
+    }
 }
 
 }  // namespace vl

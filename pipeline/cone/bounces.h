@@ -62,8 +62,10 @@ enum class BounceTail {
 // SettingsError for bounces < 0 or > 1024, a gather level outside 0..16 or invalid settings,
 // Error when radiance, faceRadiance (when present), albedo, normal, axisWeights, opacity or
 // solid do not match the voxel count. `progress`, when given, advances by the voxel count
-// once per bounce.
+// once per bounce. `mips`, when given and bounces > 0, receives the radiance mips of the
+// result: the bounces' own mips relit, the same bytes as buildRadianceMips(voxels) afterwards
+// (RadianceMips::relight), without building the levels and index grids a second time.
 void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces, int gatherLevel,
-                      BounceTail tail, Progress* progress = nullptr);
+                      BounceTail tail, Progress* progress = nullptr, RadianceMips* mips = nullptr);
 
 }  // namespace vl

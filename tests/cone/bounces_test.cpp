@@ -218,3 +218,32 @@ TEST_CASE("The geometric tail takes a closed box's bounces to their limit", "[co
     CHECK(twoWithTail == Approx(many).epsilon(0.01));  // and the extrapolation finds it
     CHECK(many < 1.0 / (1.0 - rho) + 1e-6);            // never more than a perfect gather gives
 }
+
+TEST_CASE("The mips propagateBounces hands back are those of its result", "[cone]") {
+    // The bake takes the bounces' own mips, relit, instead of building them again: every
+    // level's texels and isotropic values must be the bytes buildRadianceMips gives for the
+    // bounced voxels, or the final gather would read other light than the voxels hold.
+    VoxelScene box = vl::test::closedBox(16, 1, vec3(1.0f, 0.8f, 0.6f), vec3(0.5f));
+    RadianceMips handed;
+    propagateBounces(box, settingsFor(6), 3, 1, BounceTail::Geometric, nullptr, &handed);
+    const RadianceMips built = buildRadianceMips(box);
+    REQUIRE(handed.levelCount() == built.levelCount());
+    REQUIRE(built.levelCount() > 2);
+    for (int k = 0; k < built.levelCount(); ++k) {
+        const MipLevel& a = handed.level(k);
+        const MipLevel& b = built.level(k);
+        REQUIRE(a.texels.size() == b.texels.size());
+        CHECK(a.coords == b.coords);
+        CHECK(a.values == b.values);
+        bool same = true;
+        for (size_t t = 0; t < a.texels.size() && same; ++t)
+            same = a.texels[t].radiance == b.texels[t].radiance && a.texels[t].alpha == b.texels[t].alpha &&
+                   a.texels[t].coverage == b.texels[t].coverage && a.texels[t].density == b.texels[t].density;
+        INFO("level " << k);
+        CHECK(same);
+    }
+    // No bounces: nothing is handed back and the caller builds the mips itself.
+    RadianceMips none;
+    propagateBounces(box, settingsFor(6), 0, 1, BounceTail::None, nullptr, &none);
+    CHECK(none.levelCount() == 0);
+}
