@@ -91,6 +91,7 @@ SideWeights sideWeights(const VoxelScene& voxels, const IrradianceCacheView& cac
         std::vector<uint32_t> perSlot;  // entries of each side slot of the chunk's voxels
         std::vector<uint32_t> point;
         std::vector<float> weight;
+        std::vector<uint32_t> selfGathered;  // global side slots of the chunk with no point
     };
     constexpr size_t kChunkVoxels = 2048;
     const size_t chunks = (voxels.size() + kChunkVoxels - 1) / kChunkVoxels;
@@ -109,6 +110,7 @@ SideWeights sideWeights(const VoxelScene& voxels, const IrradianceCacheView& cac
                 });
                 for (size_t k = begin; k < part.weight.size(); ++k) part.weight[k] /= total;
                 part.perSlot[(i - first) * 6 + size_t(s)] = static_cast<uint32_t>(part.point.size() - begin);
+                if (part.point.size() == begin) part.selfGathered.push_back(static_cast<uint32_t>(i * 6 + size_t(s)));
             }
         }
     });
@@ -122,12 +124,7 @@ SideWeights sideWeights(const VoxelScene& voxels, const IrradianceCacheView& cac
             out.begin[slot + 1] = out.begin[slot] + count;
             ++slot;
         }
-    }
-    for (size_t i = 0; i < voxels.size(); ++i) {
-        const int sideCount = voxelSides(voxels.normal[i], voxels.axisWeights[i].data()).count;
-        for (int s = 0; s < sideCount; ++s)
-            if (out.begin[i * 6 + size_t(s) + 1] == out.begin[i * 6 + size_t(s)])
-                out.selfGathered.push_back(static_cast<uint32_t>(i * 6 + size_t(s)));
+        out.selfGathered.insert(out.selfGathered.end(), part.selfGathered.begin(), part.selfGathered.end());
     }
     return out;
 }
