@@ -152,13 +152,16 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
         if (onGpu) return cuda::lightVoxelsCuda(scene, result.voxels, settings.lighting);
         return lightVoxels(scene, result.voxels, settings.lighting, &progress);
     });
-    RadianceMips bounced;  // the bounces' own mips, relit with their result
+    RadianceMips bounced;          // the bounces' own mips, relit with their result
+    IrradianceCache bouncePoints;  // and their gather points, linked over them
     timed(result.stages, "bounces", [&] {
         Progress progress("bounces", uint64_t(settings.bounces) * result.voxels.size(), settings.quiet);
         propagateBounces(result.voxels, bounceConeSettings(settings), settings.bounces, settings.bounceGatherLevel,
-                         settings.bounceTail ? BounceTail::Geometric : BounceTail::None, &progress, &bounced);
+                         settings.bounceTail ? BounceTail::Geometric : BounceTail::None, &progress, &bounced,
+                         &bouncePoints);
         return 0;
     });
+    const bool reusePoints = bounced.levelCount() > 0 && settings.bounceGatherLevel == settings.gatherLevel;
     result.mips = timed(result.stages, "mips", [&] {
         return bounced.levelCount() > 0 ? std::move(bounced) : buildRadianceMips(result.voxels);
     });
@@ -167,8 +170,12 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
     IrradianceCache cache;
     if (settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images)) {
         timed(result.stages, "gather", [&] {
-            cache = IrradianceCache(result.voxels, settings.gatherLevel);
-            cache.link(mipView);
+            if (reusePoints) {
+                cache = std::move(bouncePoints);
+            } else {
+                cache = IrradianceCache(result.voxels, settings.gatherLevel);
+                cache.link(mipView);
+            }
             Progress progress("gather", cache.points().size(), settings.quiet);
             if (onGpu)
                 cache.setIrradiance(

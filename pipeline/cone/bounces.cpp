@@ -132,7 +132,7 @@ SideWeights sideWeights(const VoxelScene& voxels, const IrradianceCacheView& cac
 }  // namespace
 
 void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces, int gatherLevel,
-                      BounceTail tail, Progress* progress, RadianceMips* resultMips) {
+                      BounceTail tail, Progress* progress, RadianceMips* resultMips, IrradianceCache* resultCache) {
     validateConeSettings(settings);
     if (bounces < 0 || bounces > kMaxBounces)
         throw SettingsError("bounces = " + std::to_string(bounces) + " is outside [0, " +
@@ -222,6 +222,7 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
     if (resultMips) {
         mips.relight(voxels, voxels.radiance, voxels.faceRadiance);
         *resultMips = std::move(mips);
+        if (resultCache) *resultCache = std::move(cache);
     }
 }
 

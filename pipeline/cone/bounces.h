@@ -31,6 +31,7 @@
 #pragma once
 
 #include "cone/cone_trace.h"
+#include "cone/irradiance_cache.h"
 #include "voxel/voxel_scene.h"
 
 namespace vl {
@@ -65,7 +66,10 @@ enum class BounceTail {
 // once per bounce. `mips`, when given and bounces > 0, receives the radiance mips of the
 // result: the bounces' own mips relit, the same bytes as buildRadianceMips(voxels) afterwards
 // (RadianceMips::relight), without building the levels and index grids a second time.
+// `cache`, likewise, receives the bounces' gather points at gatherLevel, linked over those
+// mips (the topology a final gather at the same level builds and links again).
 void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces, int gatherLevel,
-                      BounceTail tail, Progress* progress = nullptr, RadianceMips* mips = nullptr);
+                      BounceTail tail, Progress* progress = nullptr, RadianceMips* mips = nullptr,
+                      IrradianceCache* cache = nullptr);
 
 }  // namespace vl

@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cstring>
 
 using namespace vl;
@@ -219,14 +220,28 @@ TEST_CASE("The geometric tail takes a closed box's bounces to their limit", "[co
     CHECK(many < 1.0 / (1.0 - rho) + 1e-6);            // never more than a perfect gather gives
 }
 
-TEST_CASE("The mips propagateBounces hands back are those of its result", "[cone]") {
+TEST_CASE("The mips and gather points propagateBounces hands back are those of its result", "[cone]") {
     // The bake takes the bounces' own mips, relit, instead of building them again: every
     // level's texels and isotropic values must be the bytes buildRadianceMips gives for the
     // bounced voxels, or the final gather would read other light than the voxels hold.
     VoxelScene box = vl::test::closedBox(16, 1, vec3(1.0f, 0.8f, 0.6f), vec3(0.5f));
     RadianceMips handed;
-    propagateBounces(box, settingsFor(6), 3, 1, BounceTail::Geometric, nullptr, &handed);
+    IrradianceCache handedPoints;
+    propagateBounces(box, settingsFor(6), 3, 1, BounceTail::Geometric, nullptr, &handed, &handedPoints);
     const RadianceMips built = buildRadianceMips(box);
+    // The gather points likewise: the same points, linked to the same neighbours.
+    IrradianceCache builtPoints(box, 1);
+    builtPoints.link(built.view());
+    REQUIRE(handedPoints.points().size() == builtPoints.points().size());
+    REQUIRE(!builtPoints.points().empty());
+    const IrradianceCacheView a = handedPoints.view(handed.view()), b = builtPoints.view(built.view());
+    REQUIRE(a.pointCount == b.pointCount);
+    CHECK(std::equal(a.neighbourBegin, a.neighbourBegin + a.pointCount + 1, b.neighbourBegin));
+    CHECK(std::equal(a.neighbours, a.neighbours + a.neighbourBegin[a.pointCount], b.neighbours));
+    for (size_t q = 0; q < builtPoints.points().size(); ++q) {
+        CHECK(handedPoints.points()[q].position == builtPoints.points()[q].position);
+        CHECK(handedPoints.points()[q].normal == builtPoints.points()[q].normal);
+    }
     REQUIRE(handed.levelCount() == built.levelCount());
     REQUIRE(built.levelCount() > 2);
     for (int k = 0; k < built.levelCount(); ++k) {
