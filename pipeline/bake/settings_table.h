@@ -42,4 +42,12 @@ void applySetting(const SettingsTable<Settings>& table, Settings& settings, cons
     throw SettingsError("unknown setting '" + name + "' (known: " + known + ")");
 }
 
+// Applies one setting written "name=value"; SettingsError when it has no name or no '='.
+template <typename Settings>
+void applySetting(const SettingsTable<Settings>& table, Settings& settings, const std::string& assignment) {
+    const size_t eq = assignment.find('=');
+    if (eq == std::string::npos || eq == 0) throw SettingsError("'" + assignment + "' is not name=value");
+    applySetting(table, settings, assignment.substr(0, eq), assignment.substr(eq + 1));
+}
+
 }  // namespace vl

@@ -222,8 +222,8 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
     if (resultMips) {
         mips.relight(voxels, voxels.radiance, voxels.faceRadiance);
         *resultMips = std::move(mips);
-        if (resultCache) *resultCache = std::move(cache);
     }
+    if (resultCache) *resultCache = std::move(cache);
 }
 
 }  // namespace vl

@@ -49,9 +49,7 @@ int main(int argc, char** argv) {
                 std::stringstream list(argv[++i]);
                 for (std::string item; std::getline(list, item, ',');) counts.push_back(std::stoi(item));
             } else {
-                const size_t eq = arg.find('=');
-                if (eq == std::string::npos) throw SettingsError("expected --spp, --bounces or name=value, got '" + arg + "'");
-                applySetting(bakeSettingsTable(), job.settings, arg.substr(0, eq), arg.substr(eq + 1));
+                applySetting(bakeSettingsTable(), job.settings, arg);
             }
         }
         const BenchTraceScene traced = loadBenchTraceScene(job);

@@ -7,7 +7,6 @@
 //   build/accuracy/accuracy_rotations [--turns N] [name=value …]   (bake settings)
 #include "bake/bake.h"
 #include "bake/bake_settings.h"
-#include "core/error.h"
 #include "core/image_io.h"
 #include "metrics/metrics.h"
 #include "scene/gltf_loader.h"
@@ -59,9 +58,7 @@ int main(int argc, char** argv) {
                 turns = std::stoi(argv[++i]);
                 continue;
             }
-            const size_t eq = arg.find('=');
-            if (eq == std::string::npos) throw SettingsError("expected --turns N or name=value, got '" + arg + "'");
-            applySetting(bakeSettingsTable(), settings, arg.substr(0, eq), arg.substr(eq + 1));
+            applySetting(bakeSettingsTable(), settings, arg);
         }
         // Uniform random rotations: normalised 4-D Gaussian quaternions, fixed seed.
         std::mt19937_64 rng(20261124);
