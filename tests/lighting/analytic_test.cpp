@@ -294,3 +294,33 @@ TEST_CASE("An emitter's own voxels do not shadow its light and a one-sided emitt
     CHECK(full.radiance[indexOf(full, ivec3(0, 0, 20))].x > 0.0f);
     CHECK(full.radiance[indexOf(full, ivec3(0, 0, 0))].x > 0.0f);
 }
+
+TEST_CASE("An emitter flush under a surface does not light the surface it covers; a surface a layer away is lit exactly",
+          "[lighting]") {
+    // A double-sided square light 0.05 voxel under a ceiling (a lamp panel mounted on it):
+    // its back lights the ceiling, but only the part it covers, where nothing can see it, and
+    // the voxels there hold the emitter's side too. Were it lit, cones would see the ceiling
+    // glow through the light's voxels (the Cycles Cornell box floor took 14 % of its first
+    // bounce from that glow, the path tracer none). The same light two layers under the
+    // ceiling lights it with the exact parallel-rectangle form factor.
+    const float Le = 2.0f, half = 0.2f;
+    for (int gapLayers : {0, 2}) {
+        const float ceiling = 1.0f + gapLayers * float(kH);
+        const Scene twoSided = emissiveSquare(-half, half, -half, half, 1.0f - 0.05f * float(kH), Le, true);
+        VoxelBuilder builder(kH);
+        for (int u = -10; u <= 10; ++u)
+            for (int v = -10; v <= 10; ++v) builder.set(ivec3(u, v, 10 + gapLayers), surfaceVoxel(vec3(0, 0, -1)));
+        VoxelScene voxels = builder.build();
+        lightVoxels(twoSided, voxels, LightingSettings{});
+        double worst = 0.0;
+        for (size_t i = 0; i < voxels.size(); ++i) {
+            const vec3 p = voxels.centre(i);
+            const double c = ceiling - (1.0 - 0.05 * kH);
+            const double F = rectangleFormFactor(-half - p.x, half - p.x, -half - p.y, half - p.y, c);
+            const double expected = gapLayers == 0 ? 0.0 : 0.5 / M_PI * Le * M_PI * F;
+            worst = std::max(worst, std::abs(voxels.radiance[i].x - expected) / (0.5 * Le));
+        }
+        INFO("ceiling " << gapLayers << " layers above the light's own; worst error / (albedo Le) " << worst);
+        CHECK(worst < 1e-4);
+    }
+}
