@@ -527,3 +527,85 @@ TEST_CASE("Atlas groups that cannot be baked are refused naming the group and wh
     Diagnostics strict(true, false);
     CHECK_THROWS_AS(buildLightmapReceivers(scene, settings, strict), InputError);
 }
+
+namespace {
+
+// A uniform emissive rectangle [−a, a] × [−b, b] at z = −depth facing +Z, turned by `angle`
+// about the Z axis and shifted by (cx, cy).
+Scene emissiveRectangle(float a, float b, float depth, float angle, float cx, float cy, float Le) {
+    Scene scene;
+    scene.sourcePath = "emitter.gltf";
+    Material material;
+    material.name = "light";
+    material.baseColorFactor = vec4(0.0f, 0.0f, 0.0f, 1.0f);
+    material.emissiveFactor = vec3(1.0f);
+    material.emissiveStrength = Le;
+    scene.materials.push_back(material);
+    Mesh mesh;
+    mesh.name = "light";
+    mesh.material = 0;
+    const float c = std::cos(angle), s = std::sin(angle);
+    for (vec2 corner : {vec2(-a, -b), vec2(a, -b), vec2(a, b), vec2(-a, b)})
+        mesh.positions.push_back(vec3(cx + c * corner.x - s * corner.y, cy + s * corner.x + c * corner.y, -depth));
+    mesh.normals.assign(4, vec3(0, 0, 1));
+    mesh.indices = {0, 1, 2, 0, 2, 3};  // counter-clockwise seen from +Z: the front faces the camera
+    scene.meshes.push_back(mesh);
+    return scene;
+}
+
+}  // namespace
+
+TEST_CASE("A pixel on a uniform emitter's edge shows the emitter's radiance times the share of the pixel it covers", "[bake]") {
+    // Camera at the origin looking down −Z; the emitter lies in a plane parallel to the film,
+    // so its image is the rectangle's projection, scaled by W / (2·depth·tan(fov/2)·aspect).
+    // The truth per pixel: the area of that projection inside the pixel; unturned, the product
+    // of the overlaps along x and y (exact); turned, from a 500 × 500 grid of points per pixel
+    // (off by less than 1/500 per unit of edge crossing the pixel). An 8 × 8 grid of rays
+    // alone moves in steps of 1/8 across a straight edge (up to 1/16 of the radiance off).
+    const int W = 24, H = 16;
+    const float Le = 18.6f, depth = 3.0f;
+    Camera camera;
+    camera.position = vec3(0.0f);
+    camera.forward = vec3(0.0f, 0.0f, -1.0f);
+    camera.up = vec3(0.0f, 1.0f, 0.0f);
+    camera.yfov = 0.8f;
+    const CameraModel model = makeCameraModel(camera, W, H);
+    for (float angle : {0.0f, 0.4f}) {
+        const float a = 0.61f, b = 0.37f, cx = 0.093f, cy = -0.041f;
+        const Scene scene = emissiveRectangle(a, b, depth, angle, cx, cy, Le);
+        const SceneTriangles triangles = gatherTriangles(scene);
+        const Bvh bvh = Bvh::build(triangles);
+        const TraceScene trace = TraceScene::build(scene, triangles);
+        const CameraReceivers r = buildCameraReceivers(trace, bvh, model, 2, 8, true);
+        const double scaleX = W / (2.0 * depth * std::tan(0.4) * double(W) / H), scaleY = H / (2.0 * depth * std::tan(0.4));
+        const auto covered = [&](double fx, double fy) {  // film point → inside the rectangle
+            const double X = (fx - 0.5 * W) / scaleX - cx, Y = (0.5 * H - fy) / scaleY - cy;
+            const double u = std::cos(angle) * X + std::sin(angle) * Y, v = -std::sin(angle) * X + std::cos(angle) * Y;
+            return std::abs(u) <= a && std::abs(v) <= b;
+        };
+        const auto overlap = [](double lo, double hi, int pixel) {
+            return std::max(0.0, std::min(hi, pixel + 1.0) - std::max(lo, double(pixel)));
+        };
+        double worst = 0.0;
+        int edgePixels = 0;
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                double share;
+                if (angle == 0.0f) {
+                    share = overlap(0.5 * W + (cx - a) * scaleX, 0.5 * W + (cx + a) * scaleX, x) *
+                            overlap(0.5 * H - (cy + b) * scaleY, 0.5 * H - (cy - b) * scaleY, y);
+                } else {
+                    constexpr int kGrid = 500;
+                    int inside = 0;
+                    for (int j = 0; j < kGrid; ++j)
+                        for (int i = 0; i < kGrid; ++i) inside += covered(x + (i + 0.5) / kGrid, y + (j + 0.5) / kGrid);
+                    share = double(inside) / (kGrid * kGrid);
+                }
+                edgePixels += share > 0.0 && share < 1.0;
+                worst = std::max(worst, std::abs(r.emission.at(x, y, 0) / Le - share));
+            }
+        INFO("turned " << angle << " rad: " << edgePixels << " edge pixels, worst |pixel / Le − covered share| " << worst);
+        CHECK(edgePixels > 20);
+        CHECK(worst < (angle == 0.0f ? 1e-4 : 4e-3));
+    }
+}
