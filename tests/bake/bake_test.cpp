@@ -74,7 +74,8 @@ Scene twoRooms(float wallThickness) {
 // Cornell boxes at the default settings: lightmap total (covered texels) and camera image
 // (the emitter, reference > 5, excluded) within 10% relative RMSE, the indirect part alone
 // (Cycles' total − direct: its converged path-traced indirect) within 20%. Measured at the
-// defaults (quad / point): lightmap 6.6% / 8.9%, image 8.9% / 9.5%, indirect 14.1% / 18.2%.
+// defaults (quad / point, f218af5): lightmap 5.3% / 8.1%, image 6.4% / 9.4%, indirect
+// 11.2% / 16.7%.
 TEST_CASE("The default bake of the Cycles Cornell boxes matches Cycles' lightmaps and renders", "[bake]") {
     VL_SKIP_WITHOUT_SHARED();
     const std::string dir = sharedDir() + "/reference/";
