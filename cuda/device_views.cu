@@ -66,6 +66,7 @@ lighting::LightingView uploadLighting(DeviceBuffers& owner, const lighting::Ligh
     d.axisWeights = upload(owner, host.axisWeights, 6 * n);
     d.opacity = upload(owner, host.opacity, n);
     d.solid = upload(owner, host.solid, n);
+    d.surfaceOffset = host.surfaceOffset ? upload(owner, host.surfaceOffset, n) : nullptr;
     d.lights = upload(owner, host.lights, host.lightCount);
     d.emitters = upload(owner, host.emitters, host.emitterCount);
     d.emitterSamples = upload(owner, host.emitterSamples, emitterSampleCount(host));

@@ -266,6 +266,7 @@ LightingStats lightVoxels(const Scene& scene, VoxelScene& voxels, const Lighting
     view.axisWeights = voxels.axisWeights.front().data();
     view.opacity = voxels.opacity.data();
     view.solid = voxels.solid.data();
+    view.surfaceOffset = voxels.surfaceOffset.size() == n ? voxels.surfaceOffset.data() : nullptr;
     view.boundsMin = voxels.coords.front();
     view.boundsMax = voxels.coords.front();
     for (const ivec3& c : voxels.coords) {

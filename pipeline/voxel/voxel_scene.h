@@ -43,6 +43,11 @@ struct VoxelScene {
     std::vector<vec3> normal;        // area-weighted mean normal; unit, or zero where normals cancel
     std::vector<AxisWeights> axisWeights;  // area-weighted positive/negative normal parts per axis
     std::vector<vec3> emission;      // radiance; empty when the scene has no emitters
+    // Index space: where the surface inside the voxel lies relative to its centre (the
+    // coverage-weighted centroid of its pieces, each component in [−½, ½]); the lighting
+    // stage evaluates a voxel's light there. Empty (voxels read from a .vdb, synthetic
+    // scenes): the centres. Interior voxels (fillInterior) have 0.
+    std::vector<vec3> surfaceOffset;
     std::vector<float> opacity;      // coverage α in (0, 1]
     std::vector<uint8_t> solid;      // 1 = blocks light completely (marker grid)
     std::vector<vec3> radiance;      // outgoing diffuse radiance, written by the lighting stage

@@ -47,6 +47,7 @@ struct Fragment {
     uint64_t key;       // packed voxel coordinate, ordered like (x, y, z)
     uint32_t triangle;  // global triangle id: the tie-break that fixes the summation order
     float coverage;     // visible piece area / h²
+    vec3 centroid;      // the piece's centroid relative to the voxel's centre (voxel units)
     vec3 albedo;        // coverage-weighted mean over the piece
     vec3 emission;
 };
@@ -101,6 +102,21 @@ struct PieceShading {
 // one per fan triangle, each at the centroid of one of the k² congruent sub-triangles of a
 // k-fold subdivision (an equal-area quadrature, exact for linear colours). A sliver that
 // clips a voxel's corner needs no more samples than its size.
+// Area centroid of a clipped piece (a convex polygon): its fan triangles' centroids weighted
+// by their areas; the vertices' mean for a piece without area.
+dvec3 pieceCentroid(const ClipPolygon& piece) {
+    dvec3 sum(0.0), mean(0.0);
+    double area = 0.0;
+    for (int k = 0; k < piece.count; ++k) mean += piece.position[k] / double(piece.count);
+    for (int k = 1; k + 1 < piece.count; ++k) {
+        const double a = 0.5 * glm::length(glm::cross(piece.position[k] - piece.position[0],
+                                                     piece.position[k + 1] - piece.position[0]));
+        sum += a * (piece.position[0] + piece.position[k] + piece.position[k + 1]) / 3.0;
+        area += a;
+    }
+    return area > 0.0 ? sum / area : mean;
+}
+
 PieceShading shadePiece(const Scene& scene, const MeshShading& shading, uint32_t triangle,
                         const ClipPolygon& piece, double pieceArea, const dvec3& n, int samplesPerAxis,
                         bool withEmission) {
@@ -315,6 +331,7 @@ size_t mergeInside(VoxelScene& voxels, const std::vector<InsideVoxel>& inside, c
     merged.axisWeights.reserve(reserve);
     merged.opacity.reserve(reserve);
     merged.solid.reserve(reserve);
+    merged.surfaceOffset.reserve(reserve);
     if (withEmission) merged.emission.reserve(reserve);
     auto copySurface = [&](size_t v, bool isInside) {
         merged.coords.push_back(voxels.coords[v]);
@@ -324,6 +341,7 @@ size_t mergeInside(VoxelScene& voxels, const std::vector<InsideVoxel>& inside, c
         if (withEmission) merged.emission.push_back(voxels.emission[v]);
         merged.opacity.push_back(isInside ? 1.0f : voxels.opacity[v]);
         merged.solid.push_back(isInside ? 1 : voxels.solid[v]);
+        merged.surfaceOffset.push_back(voxels.surfaceOffset[v]);
     };
     size_t s = 0, added = 0;
     for (const InsideVoxel& iv : inside) {
@@ -339,6 +357,7 @@ size_t mergeInside(VoxelScene& voxels, const std::vector<InsideVoxel>& inside, c
         if (withEmission) merged.emission.push_back(vec3(0.0f));
         merged.opacity.push_back(1.0f);
         merged.solid.push_back(1);
+        merged.surfaceOffset.push_back(vec3(0.0f));
         ++added;
     }
     while (s < voxels.size()) copySurface(s++, false);
@@ -349,6 +368,7 @@ size_t mergeInside(VoxelScene& voxels, const std::vector<InsideVoxel>& inside, c
     voxels.emission = std::move(merged.emission);
     voxels.opacity = std::move(merged.opacity);
     voxels.solid = std::move(merged.solid);
+    voxels.surfaceOffset = std::move(merged.surfaceOffset);
     return added;
 }
 
@@ -507,6 +527,7 @@ VoxelScene voxelize(const Scene& scene, const VoxelSettings& settings, Progress*
                                   f.key = packer.pack(voxel);
                                   f.triangle = static_cast<uint32_t>(id);
                                   f.coverage = static_cast<float>(shade.coverage);
+                                  f.centroid = vec3(pieceCentroid(piece) - dvec3(voxel));
                                   f.albedo = vec3(shade.albedo / shade.coverage);
                                   f.emission = vec3(shade.emission / shade.coverage);
                                   fragments.push_back(f);
@@ -540,13 +561,14 @@ VoxelScene voxelize(const Scene& scene, const VoxelSettings& settings, Progress*
     out.axisWeights.resize(voxelCount);
     out.opacity.resize(voxelCount);
     out.solid.resize(voxelCount);
+    out.surfaceOffset.resize(voxelCount);
     if (withEmission) out.emission.resize(voxelCount);
     std::vector<double> voxelArea(voxelCount);
 
     tbb::parallel_for(tbb::blocked_range<size_t>(0, voxelCount, 256), [&](const tbb::blocked_range<size_t>& range) {
         for (size_t v = range.begin(); v != range.end(); ++v) {
             double coverage = 0.0;
-            dvec3 albedo(0.0), emission(0.0), normal(0.0);
+            dvec3 albedo(0.0), emission(0.0), normal(0.0), centroid(0.0);
             double axis[6] = {0, 0, 0, 0, 0, 0};
             for (size_t f = runStart[v]; f < runStart[v + 1]; ++f) {
                 const Fragment& frag = fragments[f];
@@ -554,6 +576,7 @@ VoxelScene voxelize(const Scene& scene, const VoxelSettings& settings, Progress*
                 const double c = frag.coverage;
                 coverage += c;
                 albedo += c * dvec3(frag.albedo);
+                centroid += c * dvec3(frag.centroid);
                 emission += c * dvec3(frag.emission);
                 normal += c * dvec3(tri.normal);
                 for (int a = 0; a < 3; ++a) {
@@ -569,6 +592,7 @@ VoxelScene voxelize(const Scene& scene, const VoxelSettings& settings, Progress*
             }
             out.coords[v] = packer.unpack(fragments[runStart[v]].key);
             out.albedo[v] = vec3(albedo / coverage);
+            out.surfaceOffset[v] = glm::clamp(vec3(centroid / coverage), vec3(-0.5f), vec3(0.5f));
             if (withEmission) out.emission[v] = vec3(emission / coverage);
             const double normalLength = glm::length(normal);
             out.normal[v] = normalLength > 1e-6 * coverage ? vec3(normal / normalLength) : vec3(0.0f);

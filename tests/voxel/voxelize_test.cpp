@@ -298,6 +298,12 @@ TEST_CASE("An axis-aligned quad covers exactly the voxels counted by hand", "[vo
             CHECK(voxels.normal[v] == vec3(0, 0, flip ? -1 : 1));
             const AxisWeights expectedWeights = {0, 0, 0, 0, flip ? 0.0f : voxels.opacity[v], flip ? voxels.opacity[v] : 0.0f};
             for (int f = 0; f < 6; ++f) CHECK(voxels.axisWeights[v][f] == Approx(expectedWeights[f]).margin(1e-6));
+            // Where the surface lies in the voxel: the middle of its overlap on x and y, z − k.
+            const double xMid = 0.5 * (std::max(0.2, c.x - 0.5) + std::min(3.7, c.x + 0.5));
+            const double yMid = 0.5 * (std::max(-0.6, c.y - 0.5) + std::min(1.1, c.y + 0.5));
+            CHECK(voxels.surfaceOffset[v].x == Approx(xMid - c.x).margin(1e-5));
+            CHECK(voxels.surfaceOffset[v].y == Approx(yMid - c.y).margin(1e-5));
+            CHECK(voxels.surfaceOffset[v].z == Approx(z - layer).margin(1e-5));
             solid += voxels.solid[v];
         }
         CHECK(solid == 3);  // i = 1..3 at j = 0

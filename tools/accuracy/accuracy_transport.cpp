@@ -20,6 +20,7 @@
 #include "trace/bvh.h"
 #include "trace/bvh_traverse.h"
 #include "trace/trace_scene.h"
+#include "voxel/voxelize.h"
 
 #include <cstdio>
 #include <map>
@@ -93,9 +94,13 @@ int main(int argc, char** argv) {
         const Scene scene = loadGltf(path);
         Diagnostics diagnostics;
         const BakeResult baked = bake(scene, settings, diagnostics);
-        const SceneTriangles triangles = gatherTriangles(scene);
+        // The bake moved its copy of the scene to put a voxel corner at the centre of its
+        // bounds: the rays must see the triangles where the voxels do.
+        Scene anchored = scene;
+        anchorToVoxelGrid(anchored, baked.voxels.voxelSize);
+        const SceneTriangles triangles = gatherTriangles(anchored);
         const Bvh bvh = Bvh::build(triangles);
-        const TraceScene traced = TraceScene::build(scene, triangles);
+        const TraceScene traced = TraceScene::build(anchored, triangles);
         const VoxelRadianceLookup lookup(baked.voxels, traced);
         const IrradianceCache cache(baked.voxels, settings.gatherLevel);
         const MipView mips = baked.mips.view();
