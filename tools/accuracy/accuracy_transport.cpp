@@ -7,8 +7,11 @@
 // alone: the mips' blur, their opacity model, cone overlap and gaps. An accuracy
 // measurement, not a test and not a speed figure.
 //
-//   build/accuracy/accuracy_transport [SCENE.gltf] [--rays N] [--map MESH] [name=value …]
-//   (--map: the ratio over the named mesh in 8 × 8 cells of its two longest axes)
+//   build/accuracy/accuracy_transport [SCENE.gltf] [--rays N] [--map MESH] [--hot F] [name=value …]
+//   (--map: the ratio over the named mesh in 8 × 8 cells of its two longest axes; --hot: the
+//   voxel faces brighter than F times the area-weighted mean face are left out of the cones'
+//   mips and gathered by the rays instead, as a split of the light into a few bright patches
+//   handled exactly and a diffuse rest would be)
 //   (default scene: the Cycles Cornell box with the quad light, ../shared/reference/)
 #include "bake/bake.h"
 #include "bake/bake_settings.h"
@@ -79,6 +82,7 @@ int main(int argc, char** argv) {
         std::string path = VOXLIGHT_SOURCE_DIR "/../shared/reference/cornell_quad.gltf";
         int raysPerAxis = 12;
         std::string mapMesh;
+        float hotFactor = 0.0f;
         BakeSettings settings;
         settings.quiet = true;
         settings.outputs.lightmaps = settings.outputs.images = settings.outputs.grids = false;
@@ -86,6 +90,7 @@ int main(int argc, char** argv) {
             const std::string a = argv[i];
             if (a == "--rays" && i + 1 < argc) raysPerAxis = std::stoi(argv[++i]);
             else if (a == "--map" && i + 1 < argc) mapMesh = argv[++i];
+            else if (a == "--hot" && i + 1 < argc) hotFactor = std::stof(argv[++i]);
             else if (a.find('=') != std::string::npos) applySetting(bakeSettingsTable(), settings, a);
             else path = a;
         }
@@ -101,9 +106,32 @@ int main(int argc, char** argv) {
         const SceneTriangles triangles = gatherTriangles(anchored);
         const Bvh bvh = Bvh::build(triangles);
         const TraceScene traced = TraceScene::build(anchored, triangles);
+        // --hot: split the voxel faces into the bright ones (rays) and the rest (cones).
+        VoxelScene rest = baked.voxels, hot = baked.voxels;
+        size_t hotFaces = 0;
+        if (hotFactor > 0.0f) {
+            double sum = 0.0, area = 0.0;
+            for (size_t i = 0; i < rest.size(); ++i)
+                for (size_t f = 0; f < 6; ++f) {
+                    sum += rest.axisWeights[i][f] * (rest.faceRadiance[i][f].x + rest.faceRadiance[i][f].y + rest.faceRadiance[i][f].z) / 3.0;
+                    area += rest.axisWeights[i][f];
+                }
+            const double level = hotFactor * sum / std::max(area, 1e-30);
+            for (size_t i = 0; i < rest.size(); ++i) {
+                for (size_t f = 0; f < 6; ++f) {
+                    const vec3& L = rest.faceRadiance[i][f];
+                    const bool isHot = (L.x + L.y + L.z) / 3.0 > level;
+                    hotFaces += isHot ? 1 : 0;
+                    (isHot ? rest : hot).faceRadiance[i][f] = vec3(0.0f);
+                }
+                rest.radiance[i] = faceWeightedMean(rest.faceRadiance[i].data(), rest.axisWeights[i].data());
+            }
+        }
+        const RadianceMips restMips = hotFactor > 0.0f ? buildRadianceMips(rest) : RadianceMips();
         const VoxelRadianceLookup lookup(baked.voxels, traced);
+        const VoxelRadianceLookup hotLookup(hot, traced);
         const IrradianceCache cache(baked.voxels, settings.gatherLevel);
-        const MipView mips = baked.mips.view();
+        const MipView mips = hotFactor > 0.0f ? restMips.view() : baked.mips.view();
         const ConeSet& set = coneSet(settings.cone.coneCount);
         const float h = float(baked.voxels.voxelSize);
         const float halfAngle = coneHalfAngle(set, settings.cone);
@@ -142,7 +170,7 @@ int main(int argc, char** argv) {
                     // Rays spread uniformly over the cone's cap (below the receiver's plane: none).
                     vec3 u, v;
                     orthonormalBasis(dir, u, v);
-                    double radiance = 0.0;
+                    double radiance = 0.0, hotRadiance = 0.0;
                     const int n = raysPerAxis;
                     for (int i = 0; i < n; ++i)
                         for (int j = 0; j < n; ++j) {
@@ -153,12 +181,15 @@ int main(int argc, char** argv) {
                             ray.origin = apex;
                             ray.direction = sinTheta * std::cos(phi) * u + sinTheta * std::sin(phi) * v + cosTheta * dir;
                             Hit hit;
-                            if (glm::dot(ray.direction, point.normal) > 0.0f && intersectClosest(bvh.view(), ray, hit))
+                            if (glm::dot(ray.direction, point.normal) > 0.0f && intersectClosest(bvh.view(), ray, hit)) {
                                 radiance += lookup.at(ray, hit);
+                                if (hotFactor > 0.0f) hotRadiance += hotLookup.at(ray, hit);
+                            }
                         }
                     radiance /= double(n * n);
                     const double w = set.weights[k] / settings.gatherTurns;
-                    const double coneRadiance = (cone.radiance.x + cone.radiance.y + cone.radiance.z) / 3.0;
+                    const double coneRadiance =
+                        (cone.radiance.x + cone.radiance.y + cone.radiance.z) / 3.0 + hotRadiance / double(n * n);
                     mesh.cone += w * coneRadiance;
                     mesh.rays += w * radiance;
                     byRing[ringOf(d.z)].cone += w * coneRadiance;
@@ -191,6 +222,9 @@ int main(int argc, char** argv) {
         }
         printf("%s: %d cones (%d turns), first bounce gathered by cones / by rays over each cone's cap (%d rays)\n",
                path.c_str(), set.count, settings.gatherTurns, raysPerAxis * raysPerAxis);
+        if (hotFactor > 0.0f)
+            printf("  the %zu voxel faces brighter than %g times the mean face gathered by the rays in both\n", hotFaces,
+                   double(hotFactor));
         Sums all;
         for (const auto& [name, s] : byMesh) {
             printf("  %-16s %5d gather points  %.3f\n", name.c_str(), s.points, s.cone / s.rays);
