@@ -1,5 +1,6 @@
 #include "bake/bake.h"
 
+#include "bake/bright_patches.h"
 #include "bake/dilate.h"
 #include "bake/shade_receivers.h"
 #include "cone/bounces.h"
@@ -166,10 +167,20 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
         return bounced.levelCount() > 0 ? std::move(bounced) : buildRadianceMips(result.voxels);
     });
     const MipView mipView = result.mips.view();
+    const SceneTriangles triangles = gatherTriangles(scene);
+    const Bvh bvh = timed(result.stages, "bvh", [&] { return Bvh::build(triangles); });
+    const TraceScene traceScene = TraceScene::build(scene, triangles);
+    const TraceSceneView sceneView = traceScene.view();
+    const BvhView bvhView = bvh.view();
+
     // The final gather, once for every receiver of every output.
     IrradianceCache cache;
     if (settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images)) {
         timed(result.stages, "gather", [&] {
+            // The bright patches leave the mips while the cones gather, and come back after.
+            const BrightPatchSplit split = splitBrightPatches(result.voxels, settings.brightPatches);
+            result.brightPatches = split.patches.size();
+            if (!split.patches.empty()) result.mips.relight(result.voxels, split.restRadiance, split.restFaces);
             if (reusePoints) {
                 cache = std::move(bouncePoints);
             } else {
@@ -182,18 +193,20 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
                     cuda::gatherIrradianceCuda(cache.points(), mipView, settings.cone, settings.gatherTurns));
             else
                 cache.gather(mipView, settings.cone, settings.gatherTurns, &progress);
+            if (!split.patches.empty()) {
+                std::vector<vec3> irradiance = cache.irradiance();
+                const float h = static_cast<float>(result.voxels.voxelSize);
+                addBrightPatchIrradiance(cache.points(), split.patches, bvhView, settings.cone.startOffset * h, h,
+                                         irradiance);
+                cache.setIrradiance(std::move(irradiance));
+                result.mips.relight(result.voxels, result.voxels.radiance, result.voxels.faceRadiance);
+            }
             return 0;
         });
         result.gatherPoints = cache.points().size();
     }
     const IrradianceCacheView cacheView = cache.view(mipView);
     const IrradianceCacheView* gathered = settings.gatherLevel >= 0 ? &cacheView : nullptr;
-
-    const SceneTriangles triangles = gatherTriangles(scene);
-    const Bvh bvh = timed(result.stages, "bvh", [&] { return Bvh::build(triangles); });
-    const TraceScene traceScene = TraceScene::build(scene, triangles);
-    const TraceSceneView sceneView = traceScene.view();
-    const BvhView bvhView = bvh.view();
 
     if (settings.outputs.lightmaps) {
         timed(result.stages, "lightmaps", [&] {

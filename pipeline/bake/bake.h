@@ -52,6 +52,7 @@ struct BakeResult {
     std::vector<BakedImage> images;
     std::vector<StageTime> stages;
     size_t gatherPoints = 0;  // where the receivers' indirect light was gathered (0: at every sample)
+    size_t brightPatches = 0;  // gathered by shadow rays at the gather points (bake/bright_patches.h)
 };
 
 // Checks that cost nothing (settings ranges, voxel count, memory) run first; throws

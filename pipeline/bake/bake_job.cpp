@@ -60,6 +60,7 @@ nlohmann::json reportJson(const BakeReport& report, const BakeSettings& settings
     json["voxels"] = report.voxels;
     json["mip_levels"] = report.mipLevels;
     json["gather_points"] = report.gatherPoints;
+    json["bright_patches"] = report.brightPatches;
     json["lightmap_texels"] = report.lightmapTexels;
     json["covered_texels"] = report.coveredTexels;
     json["pixels"] = report.pixels;
@@ -96,6 +97,7 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
     report.voxelSize = result.voxels.voxelSize;
     report.mipLevels = static_cast<size_t>(result.mips.levelCount());
     report.gatherPoints = result.gatherPoints;
+    report.brightPatches = result.brightPatches;
 
     const auto writeStart = std::chrono::steady_clock::now();
     StagedFiles files(staging, report);

@@ -38,6 +38,7 @@ struct BakeReport {
     double voxelSize = 0.0;
     size_t mipLevels = 0;
     size_t gatherPoints = 0;
+    size_t brightPatches = 0;
     size_t lightmapTexels = 0;
     size_t coveredTexels = 0;
     size_t pixels = 0;

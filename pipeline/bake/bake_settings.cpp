@@ -72,6 +72,12 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.gatherLevel = parseIntSetting("gather-level", v, -1, kMaxCacheLevel); }},
         {"gather-turns", "cone sets traced per gather point of the final gather, each turned by 1/n turn (default 2)",
          [](S& s, const std::string& v) { s.gatherTurns = parseIntSetting("gather-turns", v, 1, kMaxGatherTurns); }},
+        {"bright-patches", "faces brighter than this many times the mean face are gathered by shadow rays at the gather points, not by cones; 0: none (default 2)",
+         [](S& s, const std::string& v) { s.brightPatches.factor = static_cast<float>(parseRealSetting("bright-patches", v, 0, 1e6)); }},
+        {"bright-patch-cell", "voxels per axis of the cells whose bright faces merge into one patch (default 8)",
+         [](S& s, const std::string& v) { s.brightPatches.cellVoxels = parseIntSetting("bright-patch-cell", v, 1, 1024); }},
+        {"bright-patch-max", "most bright patches, the most powerful first (default 256)",
+         [](S& s, const std::string& v) { s.brightPatches.maxPatches = parseIntSetting("bright-patch-max", v, 0, 65536); }},
         {"bounce-gather-level", "voxels interpolate bounce light gathered once per surface side of each block of 2^n voxels (default 3)",
          [](S& s, const std::string& v) { s.bounceGatherLevel = parseIntSetting("bounce-gather-level", v, 0, kMaxCacheLevel); }},
         // Receivers
@@ -123,6 +129,12 @@ void validateBakeSettings(const BakeSettings& s) {
     if (s.gatherTurns < 1 || s.gatherTurns > kMaxGatherTurns)
         throw SettingsError("setting gather-turns = " + std::to_string(s.gatherTurns) + " is outside 1.." +
                             std::to_string(kMaxGatherTurns));
+    if (!(s.brightPatches.factor >= 0.0f) || !std::isfinite(s.brightPatches.factor))
+        throw SettingsError("setting bright-patches = " + real(s.brightPatches.factor) + " must be 0 or positive and finite");
+    if (s.brightPatches.cellVoxels < 1 || s.brightPatches.cellVoxels > 1024)
+        throw SettingsError("setting bright-patch-cell = " + std::to_string(s.brightPatches.cellVoxels) + " is outside 1..1024");
+    if (s.brightPatches.maxPatches < 0 || s.brightPatches.maxPatches > 65536)
+        throw SettingsError("setting bright-patch-max = " + std::to_string(s.brightPatches.maxPatches) + " is outside 0..65536");
     if (s.bounceGatherLevel < 0 || s.bounceGatherLevel > kMaxCacheLevel)
         throw SettingsError("setting bounce-gather-level = " + std::to_string(s.bounceGatherLevel) + " is outside 0.." +
                             std::to_string(kMaxCacheLevel));
@@ -136,7 +148,7 @@ std::string describeBakeSettings(const BakeSettings& s) {
         << ", fill-interior=" << s.voxel.fillInterior << ", normal-weights=" << toString(s.lighting.normalWeights)
         << ", hdda=" << (s.lighting.traversal == VisibilityTraversal::Hdda) << ", cones=" << s.cone.coneCount
         << ", aperture=" << s.cone.apertureDegrees << ", cone-offset=" << s.cone.startOffset
-        << ", step-factor=" << s.cone.stepFactor << ", bounces=" << s.bounces << ", bounce-cones=" << s.bounceCones << ", bounce-tail=" << s.bounceTail << ", gather-level=" << s.gatherLevel << ", gather-turns=" << s.gatherTurns
+        << ", step-factor=" << s.cone.stepFactor << ", bounces=" << s.bounces << ", bounce-cones=" << s.bounceCones << ", bounce-tail=" << s.bounceTail << ", gather-level=" << s.gatherLevel << ", gather-turns=" << s.gatherTurns << ", bright-patches=" << s.brightPatches.factor << ", bright-patch-cell=" << s.brightPatches.cellVoxels << ", bright-patch-max=" << s.brightPatches.maxPatches
         << ", bounce-gather-level=" << s.bounceGatherLevel << ", lightmap-res=" << s.lightmap.width
         << ", lightmap-subsamples=" << s.lightmap.subsamplesPerAxis << ", emitter-strata=" << s.direct.emitterStrata
         << ", width=" << s.imageWidth << ", height=" << s.imageHeight;

@@ -1,0 +1,130 @@
+#include "bake/bright_patches.h"
+
+#include "trace/bvh_traverse.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <tuple>
+
+namespace vl {
+
+namespace {
+
+double meanOf(const vec3& v) { return (double(v.x) + double(v.y) + double(v.z)) / 3.0; }
+
+struct PatchSum {
+    glm::dvec3 power{0.0};
+    double area = 0.0;
+    glm::dvec3 weightedPosition{0.0};
+    double weight = 0.0;
+    std::vector<std::pair<uint32_t, uint8_t>> faces;  // (voxel, face)
+};
+
+}  // namespace
+
+BrightPatchSplit splitBrightPatches(const VoxelScene& voxels, const BrightPatchSettings& settings) {
+    BrightPatchSplit split;
+    split.restFaces = voxels.faceRadiance;
+    split.restRadiance = voxels.radiance;
+    const size_t n = voxels.size();
+    if (!(settings.factor > 0.0f) || voxels.faceRadiance.size() != n || voxels.axisWeights.size() != n || n == 0)
+        return split;
+
+    double sum = 0.0, area = 0.0;
+    for (size_t i = 0; i < n; ++i)
+        for (size_t f = 0; f < 6; ++f) {
+            const float w = voxels.axisWeights[i][f];
+            if (!(w > 0.0f)) continue;
+            sum += w * meanOf(voxels.faceRadiance[i][f]);
+            area += w;
+        }
+    if (!(sum > 0.0)) return split;
+    const double threshold = settings.factor * sum / area;
+
+    // Cells in (x, y, z, face) order: std::map keeps the patches' order independent of threads.
+    const int cell = std::max(1, settings.cellVoxels);
+    const double h = voxels.voxelSize;
+    std::map<std::tuple<int, int, int, int>, PatchSum> cells;
+    for (size_t i = 0; i < n; ++i)
+        for (size_t f = 0; f < 6; ++f) {
+            const float w = voxels.axisWeights[i][f];
+            const vec3& L = voxels.faceRadiance[i][f];
+            if (!(w > 0.0f) || !(meanOf(L) > threshold)) continue;
+            const ivec3 c = voxels.coords[i];
+            const auto floorDiv = [cell](int a) { return a >= 0 ? a / cell : -((-a + cell - 1) / cell); };
+            PatchSum& s = cells[std::make_tuple(floorDiv(c.x), floorDiv(c.y), floorDiv(c.z), int(f))];
+            const double A = double(w) * h * h;
+            const glm::dvec3 surface =
+                (glm::dvec3(c) + glm::dvec3(voxels.surfaceOffset.size() == n ? voxels.surfaceOffset[i] : vec3(0.0f))) * h;
+            s.power += glm::dvec3(L) * A;
+            s.area += A;
+            s.weightedPosition += meanOf(L) * A * surface;
+            s.weight += meanOf(L) * A;
+            s.faces.emplace_back(uint32_t(i), uint8_t(f));
+        }
+
+    std::vector<const PatchSum*> order;
+    std::vector<std::tuple<int, int, int, int>> keys;
+    for (const auto& [key, s] : cells) {
+        order.push_back(&s);
+        keys.push_back(key);
+    }
+    std::vector<size_t> ranked(order.size());
+    for (size_t k = 0; k < ranked.size(); ++k) ranked[k] = k;
+    // The most powerful first; ties by cell order, so the choice does not depend on the sort.
+    std::stable_sort(ranked.begin(), ranked.end(), [&](size_t a, size_t b) {
+        return meanOf(vec3(order[a]->power)) > meanOf(vec3(order[b]->power));
+    });
+    ranked.resize(std::min(ranked.size(), size_t(std::max(0, settings.maxPatches))));
+    std::sort(ranked.begin(), ranked.end());  // back to cell order
+
+    for (size_t k : ranked) {
+        const PatchSum& s = *order[k];
+        BrightPatch patch;
+        const int f = std::get<3>(keys[k]);
+        patch.normal[f >> 1] = (f & 1) ? -1.0f : 1.0f;
+        patch.area = float(s.area);
+        patch.radiance = vec3(s.power / s.area);
+        patch.position = vec3(s.weightedPosition / s.weight);
+        split.patches.push_back(patch);
+        for (const auto& [voxel, face] : s.faces) split.restFaces[voxel][face] = vec3(0.0f);
+        split.faces += s.faces.size();
+    }
+    for (size_t i = 0; i < n; ++i)
+        split.restRadiance[i] = faceWeightedMean(split.restFaces[i].data(), voxels.axisWeights[i].data());
+    return split;
+}
+
+void addBrightPatchIrradiance(const std::vector<GatherPoint>& points, const std::vector<BrightPatch>& patches,
+                              const BvhView& bvh, float lift, float voxelSize, std::vector<vec3>& irradiance) {
+    if (patches.empty()) return;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t k = range.begin(); k != range.end(); ++k) {
+            const GatherPoint& point = points[k];
+            const vec3 origin = point.position + point.normal * lift;
+            vec3 E(0.0f);
+            for (const BrightPatch& patch : patches) {
+                const vec3 d = patch.position - origin;
+                const float r2 = glm::dot(d, d);
+                if (!(r2 > 0.0f)) continue;
+                const float r = std::sqrt(r2);
+                const vec3 w = d / r;
+                const float cosPoint = glm::dot(point.normal, w), cosPatch = -glm::dot(patch.normal, w);
+                if (!(cosPoint > 0.0f) || !(cosPatch > 0.0f)) continue;
+                Ray ray;
+                ray.origin = origin;
+                ray.direction = w;
+                ray.tMax = r - voxelSize;
+                if (ray.tMax > 0.0f && intersectAny(bvh, ray)) continue;
+                E += patch.radiance * (patch.area * cosPoint * cosPatch / std::max(r2, patch.area));
+            }
+            irradiance[k] += E;
+        }
+    });
+}
+
+}  // namespace vl
