@@ -60,9 +60,13 @@ struct BakeSettings {
     int gatherTurns = 2;
     // The final gather's bright patches (bake/bright_patches.h): faces brighter than `factor`
     // times the mean face, merged per 8³ voxels, gathered by shadow rays at the gather points
-    // and left out of the cones' mips (factor 0: none). On the Cycles Cornell boxes (lightmap /
-    // image, quad; point): factor 2: 4.26% / 4.74%; 5.30% / 6.04%; none: 5.31% / 6.45%;
-    // 8.18% / 9.43% (gather level ≥ 0 only: a gather at every sample keeps all in the cones).
+    // and left out of the cones' mips (factor 0: none). Image / lightmap relative RMSE on the
+    // Cycles Cornell boxes (quad; point) and zdm2's image against the path tracer, 2026-11-24:
+    // none: 6.45% / 5.31%; 9.43% / 8.18%; 28.3%. Factor 2: 5.00% / 4.35%; 5.86% / 5.20%;
+    // 31.0%. Factor 8 (default): 5.38% / 4.74%; 5.90% / 5.57%; 26.1%. Factor 2 suits the
+    // boxes, whose bright patches are small and far from the receivers; on zdm2 it takes in
+    // wide lit walls next to the receivers, where one point per patch is too coarse.
+    // A gather at every sample (gather level −1) keeps all the light in the cones.
     BrightPatchSettings brightPatches;
     LightmapSettings lightmap;
     DirectLightSettings direct;

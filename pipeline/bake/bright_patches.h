@@ -33,7 +33,7 @@ struct BrightPatch {
 };
 
 struct BrightPatchSettings {
-    float factor = 2.0f;  // ≤ 0: no patches
+    float factor = 8.0f;  // ≤ 0: no patches
     int cellVoxels = 8;
     int maxPatches = 256;
 };
