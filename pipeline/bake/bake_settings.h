@@ -60,12 +60,12 @@ struct BakeSettings {
     int gatherTurns = 2;
     // The final gather's bright patches (bake/bright_patches.h): faces brighter than `factor`
     // times the mean face, merged per 8³ voxels, gathered by shadow rays at the gather points
-    // and left out of the cones' mips (factor 0: none). Image / lightmap relative RMSE on the
+    // and left out of the cones' mips (factor 0: none). Lightmap / image relative RMSE on the
     // Cycles Cornell boxes (quad; point) and zdm2's image against the path tracer, 2026-11-24:
-    // none: 6.45% / 5.31%; 9.43% / 8.18%; 28.3%. Factor 2: 5.00% / 4.35%; 5.86% / 5.20%;
-    // 31.0%. Factor 8 (default): 5.38% / 4.74%; 5.90% / 5.57%; 26.1%. Factor 2 suits the
+    // none: 5.31% / 6.45%; 8.18% / 9.43%; 28.3%. Factor 2: 4.26% / 4.97%; 5.16% / 5.80%;
+    // 30.0%. Factor 8 (default): 4.74% / 5.39%; 5.56% / 5.90%; 25.8%. Factor 2 suits the
     // boxes, whose bright patches are small and far from the receivers; on zdm2 it takes in
-    // wide lit walls next to the receivers, where one point per patch is too coarse.
+    // wide lit walls next to the receivers, where one shadow ray per patch is too coarse.
     // A gather at every sample (gather level −1) keeps all the light in the cones.
     BrightPatchSettings brightPatches;
     LightmapSettings lightmap;

@@ -1,5 +1,6 @@
 #include "bake/bright_patches.h"
 
+#include "core/polygon_irradiance.h"
 #include "trace/bvh_traverse.h"
 
 #include <tbb/blocked_range.h>
@@ -120,7 +121,16 @@ void addBrightPatchIrradiance(const std::vector<GatherPoint>& points, const std:
                 ray.direction = w;
                 ray.tMax = r - voxelSize;
                 if (ray.tMax > 0.0f && intersectAny(bvh, ray)) continue;
-                E += patch.radiance * (patch.area * cosPoint * cosPatch / std::max(r2, patch.area));
+                // The patch as a square of its area across its normal: Lambert's polygon formula
+                // is exact for it at any distance, where L·A·cos·cos/r² overshoots near it.
+                const int axis = patch.normal.x != 0.0f ? 0 : (patch.normal.y != 0.0f ? 1 : 2);
+                vec3 u(0.0f), v(0.0f);
+                u[(axis + 1) % 3] = 0.5f * std::sqrt(patch.area);
+                v[(axis + 2) % 3] = 0.5f * std::sqrt(patch.area);
+                const vec3 first[3] = {d - u - v, d + u - v, d + u + v};
+                const vec3 second[3] = {d - u - v, d + u + v, d - u + v};
+                E += patch.radiance *
+                     (clippedTriangleIrradiance(first, point.normal) + clippedTriangleIrradiance(second, point.normal));
             }
             irradiance[k] += E;
         }

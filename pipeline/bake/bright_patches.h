@@ -49,9 +49,11 @@ struct BrightPatchSplit {
 // face radiance.
 BrightPatchSplit splitBrightPatches(const VoxelScene& voxels, const BrightPatchSettings& settings);
 
-// Adds to irradiance[k] the patches' irradiance at point k: Σ L·A·cos θ_point·cos θ_patch /
-// max(r², A), from the point lifted `lift` metres off its surface (the cones' apex), each
-// patch behind a triangle of `bvh` (a shadow ray that stops one voxel short of it) left out.
+// Adds to irradiance[k] the patches' irradiance at point k, each patch a square of its area
+// centred on its position across its normal (Lambert's polygon formula: L·A·cos·cos/r² far
+// from it, π·L right against it), from the point lifted `lift` metres off its surface (the
+// cones' apex); a patch facing away, or behind a triangle of `bvh` (one shadow ray to its
+// centre that stops one voxel short of it), is left out.
 // TBB-parallel over the points; the same bytes at any thread count.
 void addBrightPatchIrradiance(const std::vector<GatherPoint>& points, const std::vector<BrightPatch>& patches,
                               const BvhView& bvh, float lift, float voxelSize, std::vector<vec3>& irradiance);

@@ -81,7 +81,7 @@ TEST_CASE("Bright faces become patches that carry exactly their power, and leave
     CHECK(splitBrightPatches(voxels, settings).patches.empty());
 }
 
-TEST_CASE("A bright patch gives a gather point L A cos cos / r^2 unless something stands between", "[bake]") {
+TEST_CASE("A bright patch gives a gather point L A cos cos / r^2 far off, pi L close, nothing behind a wall", "[bake]") {
     BrightPatch patch;
     patch.position = vec3(0.0f, 2.0f, 0.0f);
     patch.normal = vec3(0.0f, -1.0f, 0.0f);  // facing down at the point
@@ -110,8 +110,23 @@ TEST_CASE("A bright patch gives a gather point L A cos cos / r^2 unless somethin
     const vec3 d = patch.position - (point.position + point.normal * lift);
     const float r = glm::length(d), cosine = d.y / r;
     const vec3 expected = patch.radiance * (patch.area * cosine * cosine / (r * r));
+    // A 10 cm square 2 m off: the point-source form within (side / r)² ≈ 0.25%.
     const vec3 got = irradianceWith(open);
-    for (int c = 0; c < 3; ++c) CHECK(got[c] == Approx(expected[c]).epsilon(1e-5));
+    for (int c = 0; c < 3; ++c) CHECK(got[c] == Approx(expected[c]).epsilon(3e-3));
+
+    // Right under the middle of a 1 m² patch, 1 mm below: the patch fills nearly the whole
+    // hemisphere, E → π L (the point-source form would give L·A/r², a million times more).
+    {
+        const BrightPatch saved = patch;
+        const GatherPoint savedPoint = point;
+        patch.area = 1.0f;
+        patch.position = vec3(0.0f, lift + 0.001f, 0.0f);
+        point.position = vec3(0.0f);
+        const vec3 close = irradianceWith(open);
+        for (int c = 0; c < 3; ++c) CHECK(close[c] == Approx(kPi * patch.radiance[c]).epsilon(0.01));
+        patch = saved;
+        point = savedPoint;
+    }
 
     // A board half way up blocks it.
     Scene blocked = open;
