@@ -48,6 +48,7 @@ BrightPatchSplit splitBrightPatches(const VoxelScene& voxels, const BrightPatchS
 
     // Cells in (x, y, z, face) order: std::map keeps the patches' order independent of threads.
     const int cell = std::max(1, settings.cellVoxels);
+    const auto cellOf = [cell](int a) { return a >= 0 ? a / cell : -((-a + cell - 1) / cell); };
     const double h = voxels.voxelSize;
     std::map<std::tuple<int, int, int, int>, PatchSum> cells;
     for (size_t i = 0; i < n; ++i)
@@ -56,8 +57,7 @@ BrightPatchSplit splitBrightPatches(const VoxelScene& voxels, const BrightPatchS
             const vec3& L = voxels.faceRadiance[i][f];
             if (!(w > 0.0f) || !(meanOf(L) > threshold)) continue;
             const ivec3 c = voxels.coords[i];
-            const auto floorDiv = [cell](int a) { return a >= 0 ? a / cell : -((-a + cell - 1) / cell); };
-            PatchSum& s = cells[std::make_tuple(floorDiv(c.x), floorDiv(c.y), floorDiv(c.z), int(f))];
+            PatchSum& s = cells[std::make_tuple(cellOf(c.x), cellOf(c.y), cellOf(c.z), int(f))];
             const double A = double(w) * h * h;
             const glm::dvec3 surface =
                 (glm::dvec3(c) + glm::dvec3(voxels.surfaceOffset.size() == n ? voxels.surfaceOffset[i] : vec3(0.0f))) * h;
@@ -68,26 +68,24 @@ BrightPatchSplit splitBrightPatches(const VoxelScene& voxels, const BrightPatchS
             s.faces.emplace_back(uint32_t(i), uint8_t(f));
         }
 
-    std::vector<const PatchSum*> order;
-    std::vector<std::tuple<int, int, int, int>> keys;
-    for (const auto& [key, s] : cells) {
-        order.push_back(&s);
-        keys.push_back(key);
-    }
-    std::vector<size_t> ranked(order.size());
-    for (size_t k = 0; k < ranked.size(); ++k) ranked[k] = k;
-    // The most powerful first; ties by cell order, so the choice does not depend on the sort.
-    std::stable_sort(ranked.begin(), ranked.end(), [&](size_t a, size_t b) {
-        return meanOf(vec3(order[a]->power)) > meanOf(vec3(order[b]->power));
-    });
+    // The most powerful first (ties keep the cell order, so the choice does not depend on the
+    // sort); the first maxPatches of them, back in cell order.
+    struct Ranked {
+        size_t order;  // in cell order
+        int face;
+        const PatchSum* sum;
+    };
+    std::vector<Ranked> ranked;
+    for (const auto& [key, s] : cells) ranked.push_back({ranked.size(), std::get<3>(key), &s});
+    std::stable_sort(ranked.begin(), ranked.end(),
+                     [](const Ranked& a, const Ranked& b) { return meanOf(vec3(a.sum->power)) > meanOf(vec3(b.sum->power)); });
     ranked.resize(std::min(ranked.size(), size_t(std::max(0, settings.maxPatches))));
-    std::sort(ranked.begin(), ranked.end());  // back to cell order
+    std::sort(ranked.begin(), ranked.end(), [](const Ranked& a, const Ranked& b) { return a.order < b.order; });
 
-    for (size_t k : ranked) {
-        const PatchSum& s = *order[k];
+    for (const Ranked& r : ranked) {
+        const PatchSum& s = *r.sum;
         BrightPatch patch;
-        const int f = std::get<3>(keys[k]);
-        patch.normal[f >> 1] = (f & 1) ? -1.0f : 1.0f;
+        patch.normal[r.face >> 1] = (r.face & 1) ? -1.0f : 1.0f;
         patch.area = float(s.area);
         patch.radiance = vec3(s.power / s.area);
         patch.position = vec3(s.weightedPosition / s.weight);

@@ -437,8 +437,8 @@ struct VoxelLighting {
 template <bool Hierarchical>
 VL_HOSTDEV inline VoxelLighting shadeVoxel(const LightingView& view, IndexAccessor& accessor, uint32_t i,
                                            KernelStats& stats) {
-    // Light arrives at the surface inside the voxel, not at its centre (half a voxel off at
-    // worst: under a light 11 voxels away the Cornell ceiling's hot spot was 5–7 % low);
+    // Light arrives at the surface inside the voxel, not at its centre, which can lie half a
+    // voxel off it (under a light a few voxels away that is a few percent of 1/r²);
     // visibility still walks from the centre, where the self-occlusion rules are set.
     const vec3 receiver(view.coords[i]);
     const vec3 surface = view.surfaceOffset ? receiver + view.surfaceOffset[i] : receiver;
@@ -490,7 +490,7 @@ VL_HOSTDEV inline VoxelLighting shadeVoxel(const LightingView& view, IndexAccess
 
     for (uint32_t e = 0; e < view.emitterCount; ++e) {
         const EmitterTriangle& tri = view.emitters[e];
-        // Behind the emitter (or in its plane): no sample can reach the voxel's centre.
+        // Behind the emitter (or in its plane): no sample can reach the voxel's surface point.
         const float facingEmitter = glm::dot(tri.normal, surface - tri.v0);
         if (facingEmitter == 0.0f || (facingEmitter < 0.0f && !tri.doubleSided)) continue;
         // Behind every side of the voxel.

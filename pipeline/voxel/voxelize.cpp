@@ -97,11 +97,6 @@ struct PieceShading {
     dvec3 emission{0.0};
 };
 
-// Samples the material over a clipped piece (voxel units, so a voxel face has area 1):
-// texelSamples² points per unit area spread over the fan triangles of the piece, at least
-// one per fan triangle, each at the centroid of one of the k² congruent sub-triangles of a
-// k-fold subdivision (an equal-area quadrature, exact for linear colours). A sliver that
-// clips a voxel's corner needs no more samples than its size.
 // Area centroid of a clipped piece (a convex polygon): its fan triangles' centroids weighted
 // by their areas; the vertices' mean for a piece without area.
 dvec3 pieceCentroid(const ClipPolygon& piece) {
@@ -117,6 +112,11 @@ dvec3 pieceCentroid(const ClipPolygon& piece) {
     return area > 0.0 ? sum / area : mean;
 }
 
+// Samples the material over a clipped piece (voxel units, so a voxel face has area 1):
+// texelSamples² points per unit area spread over the fan triangles of the piece, at least
+// one per fan triangle, each at the centroid of one of the k² congruent sub-triangles of a
+// k-fold subdivision (an equal-area quadrature, exact for linear colours). A sliver that
+// clips a voxel's corner needs no more samples than its size.
 PieceShading shadePiece(const Scene& scene, const MeshShading& shading, uint32_t triangle,
                         const ClipPolygon& piece, double pieceArea, const dvec3& n, int samplesPerAxis,
                         bool withEmission) {

@@ -15,6 +15,7 @@
 //   (default scene: the Cycles Cornell box with the quad light, ../shared/reference/)
 #include "bake/bake.h"
 #include "bake/bake_settings.h"
+#include "bake/bright_patches.h"
 #include "cone/cone_trace.h"
 #include "cone/irradiance_cache.h"
 #include "core/error.h"
@@ -26,6 +27,7 @@
 #include "voxel/voxelize.h"
 
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <string>
 #include <unordered_map>
@@ -106,26 +108,21 @@ int main(int argc, char** argv) {
         const SceneTriangles triangles = gatherTriangles(anchored);
         const Bvh bvh = Bvh::build(triangles);
         const TraceScene traced = TraceScene::build(anchored, triangles);
-        // --hot: split the voxel faces into the bright ones (rays) and the rest (cones).
+        // --hot: the bake's own split (bake/bright_patches.h) with every bright face a patch of
+        // its own and none left in the mips; the rays read the bright faces, the cones the rest.
         VoxelScene rest = baked.voxels, hot = baked.voxels;
         size_t hotFaces = 0;
         if (hotFactor > 0.0f) {
-            double sum = 0.0, area = 0.0;
-            for (size_t i = 0; i < rest.size(); ++i)
-                for (size_t f = 0; f < 6; ++f) {
-                    sum += rest.axisWeights[i][f] * (rest.faceRadiance[i][f].x + rest.faceRadiance[i][f].y + rest.faceRadiance[i][f].z) / 3.0;
-                    area += rest.axisWeights[i][f];
-                }
-            const double level = hotFactor * sum / std::max(area, 1e-30);
-            for (size_t i = 0; i < rest.size(); ++i) {
-                for (size_t f = 0; f < 6; ++f) {
-                    const vec3& L = rest.faceRadiance[i][f];
-                    const bool isHot = (L.x + L.y + L.z) / 3.0 > level;
-                    hotFaces += isHot ? 1 : 0;
-                    (isHot ? rest : hot).faceRadiance[i][f] = vec3(0.0f);
-                }
-                rest.radiance[i] = faceWeightedMean(rest.faceRadiance[i].data(), rest.axisWeights[i].data());
-            }
+            BrightPatchSettings everyFace;
+            everyFace.factor = hotFactor;
+            everyFace.cellVoxels = 1;
+            everyFace.maxPatches = std::numeric_limits<int>::max();
+            const BrightPatchSplit split = splitBrightPatches(baked.voxels, everyFace);
+            hotFaces = split.faces;
+            rest.faceRadiance = split.restFaces;
+            rest.radiance = split.restRadiance;
+            for (size_t i = 0; i < hot.size(); ++i)
+                for (size_t f = 0; f < 6; ++f) hot.faceRadiance[i][f] -= rest.faceRadiance[i][f];
         }
         const RadianceMips restMips = hotFactor > 0.0f ? buildRadianceMips(rest) : RadianceMips();
         const VoxelRadianceLookup lookup(baked.voxels, traced);
