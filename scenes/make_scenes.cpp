@@ -1,7 +1,8 @@
 // Generates the project's own scenes into scenes/: the standard Cornell box from the
 // published Cornell measurements (https://www.graphics.cornell.edu/online/box/data.html),
 // lit by its 130 × 105 mm ceiling light as an emissive quad, and a variant lit by one
-// point light. Run `build/make_scenes scenes` after editing; the outputs are committed.
+// point light; and two sealed rooms sharing a thin wall, one lit, for light leaks. Run
+// `build/make_scenes scenes` after editing; the outputs are committed.
 //
 // The published data is in millimetres with the camera looking along +Z; glTF cameras look
 // along −Z, so the box is mapped by (x, y, z) ↦ (0.556 − x, y, −z)/1000, the same mapping as
@@ -112,6 +113,37 @@ SceneDescription cornellBox(bool pointLight) {
     return scene;
 }
 
+// Two sealed rooms of white walls (albedo 0.8) side by side along x, 3 × 2.5 × 3 m inside,
+// sharing one wall kTwoRoomsWall thick, a 40 W point light in room A and none in room B:
+// the truth in room B is black, and with walls this bright indirect light is three times the
+// direct, so any light the voxels carry through the wall shows (issue 13's leak scene).
+constexpr float kTwoRoomsWall = 0.1f;
+
+SceneDescription twoRooms() {
+    SceneDescription scene;
+    scene.materials = {{"Plaster", vec3(0.8f), vec3(0.0f), 1.0f}};
+    auto room = [&](const std::string& prefix, vec3 lo, vec3 hi) {
+        const vec3 inside = 0.5f * (lo + hi);
+        auto face = [&](const char* name, vec3 a, vec3 b, vec3 c, vec3 d) {
+            scene.meshes.push_back({prefix + name, 0, {oriented({a, b, c, d}, inside, true)}, true});
+        };
+        face("Floor", {lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, lo.y, hi.z}, {lo.x, lo.y, hi.z});
+        face("Ceiling", {lo.x, hi.y, lo.z}, {hi.x, hi.y, lo.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z});
+        face("WallMinusX", {lo.x, lo.y, lo.z}, {lo.x, hi.y, lo.z}, {lo.x, hi.y, hi.z}, {lo.x, lo.y, hi.z});
+        face("WallPlusX", {hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {hi.x, hi.y, hi.z}, {hi.x, lo.y, hi.z});
+        face("WallMinusZ", {lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {lo.x, hi.y, lo.z});
+        face("WallPlusZ", {lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z});
+    };
+    room("A", vec3(0.0f), vec3(3.0f, 2.5f, 3.0f));
+    room("B", vec3(3.0f + kTwoRoomsWall, 0.0f, 0.0f), vec3(6.0f + kTwoRoomsWall, 2.5f, 3.0f));
+    scene.lights.push_back({"Lamp", vec3(1.2f, 1.9f, 1.7f), vec3(1.0f), 40.0f / (4.0f * kPi) * 683.0f});
+    // In room A's corner, looking across it at the shared wall.
+    scene.camera.position = vec3(0.3f, 1.6f, 2.7f);
+    scene.camera.yfov = 1.2f;
+    scene.camera.aspectRatio = 1.0f;
+    return scene;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -120,10 +152,11 @@ int main(int argc, char** argv) {
         std::filesystem::create_directories(directory);
         writeGltf(cornellBox(false), directory, "cornell_box");
         writeGltf(cornellBox(true), directory, "cornell_box_point");
+        writeGltf(twoRooms(), directory, "two_rooms");
     } catch (const std::exception& e) {
         std::fprintf(stderr, "make_scenes: %s\n", e.what());
         return 1;
     }
-    std::printf("wrote %s/cornell_box.gltf and %s/cornell_box_point.gltf\n", directory.c_str(), directory.c_str());
+    std::printf("wrote cornell_box.gltf, cornell_box_point.gltf and two_rooms.gltf into %s\n", directory.c_str());
     return 0;
 }

@@ -121,6 +121,12 @@ VL_HOSTDEV inline vec3 liftOffSurface(const vec3& p, const vec3& n, float h) {
     return p + n * ((glm::abs(n.x) + glm::abs(n.y) + glm::abs(n.z) + 0.01f) * h);
 }
 
+// Whether level-0 voxel `voxel` of `occupancy` blocks a path (α ≥ ½: a solid wall).
+VL_HOSTDEV inline bool blocksPath(const MipLevelView& occupancy, IndexLeafCache& leaves, const nanovdb::Coord& voxel) {
+    const int32_t index = leaves.value(*occupancy.index, voxel);
+    return index >= 0 && occupancy.texels[size_t(index) * size_t(occupancy.facesPerVoxel)].alpha >= 0.5f;
+}
+
 // Whether the segment a → b (world) crosses no voxel of `occupancy` with α ≥ ½ (a solid
 // wall) besides the voxels holding its ends, sampled at most a voxel apart: consecutive
 // samples then differ by at most a voxel along every axis, so none jumps over a layer of
@@ -140,8 +146,7 @@ VL_HOSTDEV inline bool clearPath(const MipLevelView& occupancy, float h, const v
         const nanovdb::Coord voxel = voxelAt(from + (to - from) * (float(k) / float(steps)));
         if (voxel == last || voxel == first || voxel == final) continue;
         last = voxel;
-        const int32_t index = leaves.value(*occupancy.index, voxel);
-        if (index >= 0 && occupancy.texels[size_t(index) * size_t(occupancy.facesPerVoxel)].alpha >= 0.5f) return false;
+        if (blocksPath(occupancy, leaves, voxel)) return false;
     }
     return true;
 }

@@ -150,6 +150,53 @@ TEST_CASE("Light does not leak through a wall between a lit and a dark room", "[
     }
 }
 
+// scenes/two_rooms.gltf (make_scenes.cpp): two 3 × 2.5 × 3 m rooms of albedo 0.8 sharing a wall
+// 10 cm thick, a 40 W point light in room A. Room B's truth is black.
+BakeResult bakeTwoRooms(double voxelSize, int resolution, int lightmapSize) {
+    const Scene scene = loadGltf(std::string(VOXLIGHT_SOURCE_DIR) + "/scenes/two_rooms.gltf");
+    BakeSettings settings = quietSettings();
+    settings.voxel.voxelSize = voxelSize;
+    settings.voxel.resolution = resolution;
+    settings.lightmap.atlasPerMesh = true;
+    settings.lightmap.width = settings.lightmap.height = lightmapSize;
+    Diagnostics diagnostics(false, false);
+    return bake(scene, settings, diagnostics);
+}
+
+TEST_CASE("Light does not leak between the sealed bright rooms of scenes/two_rooms.gltf", "[bake]") {
+    // Issue 13's measure at walls 0.5, 1 and 2 voxels thick: room B's mean lightmap value over
+    // room A's (face means over the six faces each). Measured (2026-11-24): 0.10%, 0.18%,
+    // 0.41%; the issue's goal is 0.3%, which the 2-voxel wall does not reach (README).
+    for (const auto& [voxelSize, bound] : {std::pair{0.2, 0.003}, std::pair{0.1, 0.003}, std::pair{0.05, 0.006}}) {
+        const BakeResult result = bakeTwoRooms(voxelSize, 0, 32);
+        double lit = 0.0, dark = 0.0;
+        for (const BakedLightmap& l : result.lightmaps) (l.name[0] == 'A' ? lit : dark) += coveredMean(l) / 6.0;
+        WARN("wall " << 0.1 / voxelSize << " voxels: room B / room A = " << dark / lit);
+        REQUIRE(lit > 0.0);
+        CHECK(dark < bound * lit);
+    }
+}
+
+TEST_CASE("A texel where a wall meets the floor or ceiling gets the indirect light of the texels beside it",
+          "[bake]") {
+    // Indirect light varies over the distance to the surfaces that send it, so across a
+    // wall's texels in room A it stays within a factor of two of the wall's mean. At 63 voxels
+    // the rooms' floor and ceiling lie where a wall's edge texels sat inside their voxel
+    // layer and got a tenth of their light or none (shade_element.h lookupCandidates): at
+    // 128² per face the darkest texel of each wall was 0.001 of its mean.
+    const BakeResult result = bakeTwoRooms(0.0, 64, 128);
+    for (const BakedLightmap& l : result.lightmaps) {
+        if (l.name[0] != 'A') continue;
+        const double mean = coveredMean(l, &l.indirect);
+        double darkest = mean;
+        for (int y = 0; y < l.mask.height; ++y)
+            for (int x = 0; x < l.mask.width; ++x)
+                if (l.mask.at(x, y) > 0.5f) darkest = std::min<double>(darkest, l.indirect.at(x, y, 0));
+        INFO(l.name << ": darkest texel " << darkest << ", mean " << mean);
+        CHECK(darkest > 0.5 * mean);
+    }
+}
+
 TEST_CASE("A closed white box's indirect power stays within the mip alignment error of energy conservation",
           "[bake]") {
     // Energy conservation: the emitted power Φ bounces with albedo ρ, so Σ over surfaces of
