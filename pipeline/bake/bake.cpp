@@ -3,6 +3,7 @@
 #include "bake/bright_patches.h"
 #include "bake/dilate.h"
 #include "bake/shade_receivers.h"
+#include "bake/voxel_size.h"
 #include "cone/bounces.h"
 #include "core/error.h"
 #include "core/progress.h"
@@ -26,15 +27,6 @@ namespace {
 // edges are the brightest contrast in an image (measured on the Cycles Cornell render: the
 // emitter's edge pixels held 99% of the squared error at 2 × 2).
 constexpr int kEmissionSubsamples = 8;
-
-double availableMemoryBytes() {
-    std::ifstream meminfo("/proc/meminfo");
-    std::string key, unit;
-    double kib = 0.0;
-    while (meminfo >> key >> kib >> unit)
-        if (key == "MemAvailable:") return kib * 1024.0;
-    return static_cast<double>(sysconf(_SC_AVPHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGESIZE));
-}
 
 double surfaceArea(const Scene& scene) {
     double area = 0.0;
@@ -86,7 +78,16 @@ void checkLightAttenuationNames(const Scene& scene, const LightingSettings& ligh
 
 }  // namespace
 
-void checkMemoryBudget(const Scene& scene, const BakeSettings& settings, double voxelSize) {
+double availableMemoryBytes() {
+    std::ifstream meminfo("/proc/meminfo");
+    std::string key, unit;
+    double kib = 0.0;
+    while (meminfo >> key >> kib >> unit)
+        if (key == "MemAvailable:") return kib * 1024.0;
+    return static_cast<double>(sysconf(_SC_AVPHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGESIZE));
+}
+
+double estimateBakeMemory(const Scene& scene, const BakeSettings& settings, double voxelSize) {
     // A surface crosses about 1 to √3 voxels per h² of area; a voxel costs ~100 bytes of
     // channels, as much again in voxelization fragments, and ~50 in mips. A receiver sample
     // costs ~48 bytes, a texel or pixel ~64 per image kept.
@@ -99,7 +100,12 @@ void checkMemoryBudget(const Scene& scene, const BakeSettings& settings, double 
         ? static_cast<double>(settings.imageWidth) * settings.imageHeight *
               (48.0 * settings.imageSubsamples * settings.imageSubsamples + 64.0 * 8)
         : 0.0;
-    const double estimate = voxels * 250.0 + texels + pixels;
+    return voxels * 250.0 + texels + pixels;
+}
+
+void checkMemoryBudget(const Scene& scene, const BakeSettings& settings, double voxelSize) {
+    const double estimate = estimateBakeMemory(scene, settings, voxelSize);
+    const double voxels = 2.0 * surfaceArea(scene) / (voxelSize * voxelSize);
     const double available = availableMemoryBytes();
     if (estimate > available)
         throw SettingsError(scene.sourcePath + ": this bake would need about " + gib(estimate) + " of memory (" +
@@ -123,9 +129,17 @@ double totalSeconds(const std::vector<StageTime>& stages) {
 
 BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnostics) {
     validateBakeSettings(settings);
-    const double voxelSize = voxelSizeFor(scene, settings.voxel);
+    BakeResult result;
+    result.voxelSizeChoice = chooseVoxelSize(scene, settings);
+    const VoxelSizeChoice& choice = result.voxelSizeChoice;
+    VoxelSettings voxelSettings = settings.voxel;
+    voxelSettings.voxelSize = choice.voxelSize;
+    const double voxelSize = voxelSizeFor(scene, voxelSettings);
     anchorToVoxelGrid(scene, voxelSize);
     checkMemoryBudget(scene, settings, voxelSize);
+    if (!settings.quiet)
+        std::fprintf(stderr, "%s\n", describeVoxelSize(choice).c_str());
+    for (const std::string& warning : choice.warnings) diagnostics.warn(warning);
     checkLightAttenuationNames(scene, settings.lighting);
     if (settings.outputs.lightmaps) checkAtlasGroups(scene, settings.lightmap);
     if (scene.lights.empty() && !scene.hasEmitters())
@@ -143,10 +157,9 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
                               mayBeBuried, &progress);
     };
 
-    BakeResult result;
     result.voxels = timed(result.stages, "voxelize", [&] {
         Progress progress("voxelize", scene.triangleCount(), settings.quiet);
-        return voxelize(scene, settings.voxel, &progress);
+        return voxelize(scene, voxelSettings, &progress);
     });
     timed(result.stages, "voxel light", [&] {
         Progress progress("voxel light", result.voxels.size(), settings.quiet);

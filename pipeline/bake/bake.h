@@ -7,6 +7,7 @@
 
 #include "bake/bake_settings.h"
 #include "bake/receivers.h"
+#include "bake/voxel_size.h"
 #include "cone/irradiance_cache.h"
 #include "cone/radiance_mips.h"
 #include "core/diagnostics.h"
@@ -46,6 +47,7 @@ struct BakedImage {
 };
 
 struct BakeResult {
+    VoxelSizeChoice voxelSizeChoice;  // the voxel size and what set it (bake/voxel_size.h)
     VoxelScene voxels;  // lit, bounces included
     RadianceMips mips;
     std::vector<BakedLightmap> lightmaps;
@@ -60,6 +62,11 @@ struct BakeResult {
 // The scene is anchored to the voxel grid first (voxelize.h anchorToVoxelGrid); outputs that
 // carry positions (the grids' transform) keep it where it was in world space.
 BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnostics);
+
+// What the machine has free now (/proc/meminfo MemAvailable), and what a bake of `scene`
+// with `settings` at `voxelSize` is estimated to take: voxels, receivers and images.
+double availableMemoryBytes();
+double estimateBakeMemory(const Scene& scene, const BakeSettings& settings, double voxelSize);
 
 // Refuses, before any work, a bake whose estimated memory exceeds what the machine has
 // available (SettingsError with both figures).

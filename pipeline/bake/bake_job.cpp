@@ -57,6 +57,10 @@ nlohmann::json reportJson(const BakeReport& report, const BakeSettings& settings
     json["settings"] = describeBakeSettings(settings);
     json["triangles"] = report.triangles;
     json["voxel_size"] = report.voxelSize;
+    json["voxel_size_set_by"] = report.voxelSizeChoice.setBy;
+    json["voxels_along_longest_side"] = report.voxelSizeChoice.voxelsAlongLongest;
+    for (const LightClearance& c : report.voxelSizeChoice.clearances)
+        json["light_clearances"].push_back({{"light", c.light}, {"metres", c.metres}});
     json["voxels"] = report.voxels;
     json["mip_levels"] = report.mipLevels;
     json["gather_points"] = report.gatherPoints;
@@ -95,6 +99,7 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
     report.stages.insert(report.stages.end(), result.stages.begin(), result.stages.end());
     report.voxels = result.voxels.size();
     report.voxelSize = result.voxels.voxelSize;
+    report.voxelSizeChoice = result.voxelSizeChoice;
     report.mipLevels = static_cast<size_t>(result.mips.levelCount());
     report.gatherPoints = result.gatherPoints;
     report.brightPatches = result.brightPatches;

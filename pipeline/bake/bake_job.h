@@ -36,6 +36,7 @@ struct BakeReport {
     size_t triangles = 0;
     size_t voxels = 0;
     double voxelSize = 0.0;
+    VoxelSizeChoice voxelSizeChoice;  // what set the voxel size, and each light's clearance
     size_t mipLevels = 0;
     size_t gatherPoints = 0;
     size_t brightPatches = 0;

@@ -21,9 +21,9 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
     using S = BakeSettings;
     static const SettingsTable<BakeSettings> table = {
         // Voxelization
-        {"resolution", "voxels along the scene's longest axis (default 128)",
+        {"resolution", "voxels along the scene's longest axis (default: chosen from the scene, see bake.json)",
          [](S& s, const std::string& v) { s.voxel.resolution = parseIntSetting("resolution", v, 1, 1 << 21); }},
-        {"voxel-size", "voxel edge in metres; overrides resolution (default: from resolution)",
+        {"voxel-size", "voxel edge in metres; overrides resolution (default: chosen from the scene)",
          [](S& s, const std::string& v) { s.voxel.voxelSize = parseRealSetting("voxel-size", v, 1e-9, 1e9); }},
         {"fill-interior", "mark voxels inside closed meshes solid (default false)",
          [](S& s, const std::string& v) { s.voxel.fillInterior = parseBoolSetting("fill-interior", v); }},
@@ -119,7 +119,8 @@ void validateBakeSettings(const BakeSettings& s) {
     validateConeSettings(s.cone, "bake settings");
     validateConeSettings(bounceConeSettings(s), "bake settings (bounce-cones)");
     s.lightmap.validate();
-    if (s.voxel.resolution < 1) throw SettingsError("setting resolution = " + std::to_string(s.voxel.resolution) + " must be at least 1");
+    if (s.voxel.resolution < 0)  // 0: chosen from the scene
+        throw SettingsError("setting resolution = " + std::to_string(s.voxel.resolution) + " must be at least 1");
     if (s.voxel.voxelSize < 0.0 || !std::isfinite(s.voxel.voxelSize))
         throw SettingsError("setting voxel-size = " + real(s.voxel.voxelSize) + " must be positive and finite");
     if (s.bounces < 0 || s.bounces > 1024) throw SettingsError("setting bounces = " + std::to_string(s.bounces) + " is outside 0..1024");
@@ -144,7 +145,8 @@ void validateBakeSettings(const BakeSettings& s) {
 
 std::string describeBakeSettings(const BakeSettings& s) {
     std::ostringstream out;
-    out << "resolution=" << s.voxel.resolution << ", voxel-size=" << s.voxel.voxelSize
+    out << "resolution=" << (s.voxel.resolution > 0 ? std::to_string(s.voxel.resolution) : "auto")
+        << ", voxel-size=" << (s.voxel.voxelSize > 0.0 ? real(s.voxel.voxelSize) : "auto")
         << ", fill-interior=" << s.voxel.fillInterior << ", normal-weights=" << toString(s.lighting.normalWeights)
         << ", hdda=" << (s.lighting.traversal == VisibilityTraversal::Hdda) << ", cones=" << s.cone.coneCount
         << ", aperture=" << s.cone.apertureDegrees << ", cone-offset=" << s.cone.startOffset

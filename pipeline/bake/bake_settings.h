@@ -22,7 +22,9 @@ struct BakeOutputs {
 };
 
 struct BakeSettings {
-    VoxelSettings voxel;
+    // Neither a voxel size nor a resolution: the bake chooses one from the scene
+    // (bake/voxel_size.h); a user's voxel-size or resolution wins.
+    VoxelSettings voxel{0.0, 0};
     LightingSettings lighting;
     // The receivers' final gather: 32 cones. It sees small bright regions (the hot spot a
     // point light makes on a ceiling) directly, and a cone set too sparse for them misses or

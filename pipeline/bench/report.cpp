@@ -1,5 +1,6 @@
 #include "bench/report.h"
 
+#include "bake/voxel_size.h"
 #include "bench/display_path.h"
 #include "bench/format.h"
 #include "core/atomic_file.h"
@@ -200,6 +201,7 @@ void writeJson(BenchResult& r, const nlohmann::json& headline) {
                           {"lightmap_seconds", p.lightmapSeconds}, {"image_seconds", p.imageSeconds},
                           {"cpu_seconds", p.cpuSeconds}, {"lightmap_runs", p.lightmapRuns}, {"image_runs", p.imageRuns},
                           {"cpu_runs", p.cpuRuns}, {"peak_memory_bytes", p.peakMemoryBytes},
+                          {"voxel_size", p.voxelSize}, {"voxel_size_set_by", p.voxelSizeSetBy},
                           {"lightmap", errorJson(p.lightmap)}, {"lightmap_indirect", errorJson(p.lightmapIndirect)},
                           {"image", errorJson(p.image)}, {"image_indirect", errorJson(p.imageIndirect)},
                           {"outputs", displayPath(p.outputDir, r.outputDir)}});
@@ -388,6 +390,50 @@ std::string speedText(const Reach& reach, double vctSeconds) {
     return ratio >= 1.0 ? "**" + fmt("%.2g×", ratio) + " faster**" : "**" + fmt("%.2g×", 1.0 / ratio) + " slower**";
 }
 
+// The default's voxel size against the points that change only the resolution, by error² ×
+// time (lower is better): the figure a Monte Carlo method holds at any sample count, so the
+// best point is the one that buys its accuracy cheapest.
+nlohmann::json voxelSizeMerit(const BenchResult& r, const BenchPointResult& vct, std::ostringstream& md) {
+    std::vector<const BenchPointResult*> sweep;
+    for (const BenchPointResult& p : r.points)
+        if (p.ok && p.spec.method == "vct" && p.voxelSize > 0.0 &&
+            (&p == &vct || (p.spec.settings.size() == 1 && p.spec.settings[0].first == "resolution")))
+            sweep.push_back(&p);
+    std::sort(sweep.begin(), sweep.end(),
+              [](const BenchPointResult* a, const BenchPointResult* b) { return a->voxelSize > b->voxelSize; });
+    nlohmann::json j = {{"default_voxel_size", vct.voxelSize}, {"set_by", vct.voxelSizeSetBy}};
+    md << "- **Voxel size**: the default chose " << lengthText(vct.voxelSize) << ", set by " << vct.voxelSizeSetBy
+       << ".\n";
+    if (sweep.size() < 2) return j;
+    for (bool image : {false, true}) {
+        auto merit = [&](const BenchPointResult& p) {
+            const BenchError& e = image ? p.image : p.lightmap;
+            const double t = image ? p.imageSeconds : p.lightmapSeconds;
+            return e.available && t > 0.0 ? e.metrics.relativeRmse * e.metrics.relativeRmse * t : 0.0;
+        };
+        const BenchPointResult* best = nullptr;
+        for (const BenchPointResult* p : sweep)
+            if (merit(*p) > 0.0 && (!best || merit(*p) < merit(*best))) best = p;
+        if (!best || !(merit(vct) > 0.0)) continue;
+        const char* name = image ? "image" : "lightmap";
+        md << "  - " << name << ", error² × time over the best point's, coarse to fine:";
+        nlohmann::json points = nlohmann::json::array();
+        for (const BenchPointResult* p : sweep) {
+            const double ratio = merit(*p) / merit(*best);
+            md << (p == sweep.front() ? " " : " / ") << p->spec.label << " (" << lengthText(p->voxelSize) << ") "
+               << (merit(*p) > 0.0 ? fmt("%.2f", ratio) : "—");
+            points.push_back({{"label", p->spec.label}, {"voxel_size", p->voxelSize}, {"merit_over_best", ratio}});
+        }
+        const double ratio = merit(vct) / merit(*best);
+        md << "; the default is "
+           << (best == &vct ? std::string("the best point")
+                            : fmt("%.2f×", ratio) + " the best point's (" + best->spec.label + ")")
+           << ".\n";
+        j[name] = {{"points", points}, {"best", best->spec.label}, {"default_over_best", ratio}};
+    }
+    return j;
+}
+
 nlohmann::json headline(const BenchResult& r, std::string& markdown) {
     nlohmann::json h;
     const BenchPointResult* vct = findPoint(r, "vct", "default");
@@ -442,6 +488,7 @@ nlohmann::json headline(const BenchResult& r, std::string& markdown) {
         }
         if (!lines.str().empty()) md << "- **" << m.title << "**\n" << lines.str();
     }
+    h["voxel_size"] = voxelSizeMerit(r, *vct, md);
     markdown = md.str();
     return h;
 }

@@ -50,6 +50,8 @@ struct BenchPointResult {
     double cpuSeconds = 0.0;                // median; the shared machine is oversubscribed, so wall ≥ CPU / threads
     double peakMemoryBytes = 0.0;           // the process's resident high-water mark during the point
     BenchError lightmap, lightmapIndirect, image, imageIndirect;
+    double voxelSize = 0.0;                 // vct: the bake's voxel size (m) and what set it
+    std::string voxelSizeSetBy;
     std::string outputDir;                  // its outputs, relative to the bench folder
     std::string note;                       // e.g. where a time came from
 };

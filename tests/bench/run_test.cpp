@@ -70,7 +70,10 @@ TEST_CASE("A tiny bench run writes bench.csv with the declared columns and finit
     fs::remove_all(cache);
     BenchOptions options;
     options.base = tinyJob(out);
-    options.points = {{"vct", "default", {}, 0}, {"vct", "cones=6", {{"cones", "6"}}, 0}, {"path", "spp=4", {}, 4}};
+    options.points = {{"vct", "default", {}, 0},
+                      {"vct", "cones=6", {{"cones", "6"}}, 0},
+                      {"vct", "resolution=15", {{"resolution", "15"}}, 0},
+                      {"path", "spp=4", {}, 4}};
     options.repeats = 2;
     options.referenceSettings = tinyReference(cache);
     options.blender = "none";
@@ -78,7 +81,7 @@ TEST_CASE("A tiny bench run writes bench.csv with the declared columns and finit
     options.quiet = true;
     const BenchResult result = runBench(options);
 
-    REQUIRE(result.points.size() == 3);
+    REQUIRE(result.points.size() == 4);
     for (const BenchPointResult& p : result.points) {
         INFO(p.spec.method << " " << p.spec.label << ": " << p.error);
         CHECK(p.ok);
@@ -95,7 +98,7 @@ TEST_CASE("A tiny bench run writes bench.csv with the declared columns and finit
         while (std::getline(in, line)) v.push_back(line);
         return v;
     }();
-    REQUIRE(lines.size() == 4);
+    REQUIRE(lines.size() == 5);
     CHECK(split(lines[0]) == benchCsvColumns());
     const auto& columns = benchCsvColumns();
     const auto column = [&](const std::string& name) {
@@ -136,6 +139,30 @@ TEST_CASE("A tiny bench run writes bench.csv with the declared columns and finit
         CHECK(md.find(std::string("at equal ") + output + " error") != std::string::npos);
     }
     CHECK(md.find("How the stages scale") == std::string::npos);  // options.scaling is off
+
+    // The default's voxel size against the resolution points, by error² × time: recomputed
+    // here from the points' own figures.
+    const nlohmann::json json = nlohmann::json::parse(readText(fs::path(out) / "bench.json"));
+    const nlohmann::json& voxel = headline["voxel_size"];
+    CHECK(voxel["set_by"] == "the resolution setting");  // tinyJob sets one
+    CHECK(md.find("- **Voxel size**: the default chose") != std::string::npos);
+    for (const char* output : {"lightmap", "image"}) {
+        INFO(output);
+        double merit[2] = {0.0, 0.0};  // default, resolution=15
+        for (const nlohmann::json& p : json["points"]) {
+            const std::string label = p["label"];
+            if (label != "default" && label != "resolution=15") continue;
+            const double e = p[output]["relative_rmse"], t = p[std::string(output) + "_seconds"];
+            merit[label == "default" ? 0 : 1] = e * e * t;
+            CHECK(p["voxel_size"].get<double>() > 0.0);
+        }
+        REQUIRE(merit[0] > 0.0);
+        REQUIRE(merit[1] > 0.0);
+        CHECK(voxel[output]["points"].size() == 2);
+        CHECK(voxel[output]["default_over_best"].get<double>() ==
+              Approx(merit[0] / std::min(merit[0], merit[1])).epsilon(1e-9));
+        CHECK(voxel[output]["best"] == (merit[0] <= merit[1] ? "default" : "resolution=15"));
+    }
 }
 
 TEST_CASE("Every point of the bench sweeps is a valid bake setting, labelled once", "[bench]") {
@@ -153,7 +180,7 @@ TEST_CASE("Every point of the bench sweeps is a valid bake setting, labelled onc
         }
         CHECK(labels.count("vct default"));
         CHECK(labels.count("vct gather-turns=1"));
-        CHECK(labels.count("vct resolution=64 gather-turns=1"));
+        CHECK(labels.count("vct resolution=48 gather-turns=1"));
         CHECK(labels.count("vct gather-level=-1") == (full ? 1u : 0u));
     }
 }

@@ -1,0 +1,64 @@
+// The voxel size a bake uses when the user gives neither `resolution` nor `voxel-size`:
+// chosen from what the scene holds, the coarsest that keeps each feature within the error the
+// bench measures at its best error-per-second point (README "A voxel size the scene needs").
+//
+// Features, each measured by what it does to the bake as the voxels coarsen:
+//  * the scene's size: kSceneVoxels voxels along its longest side. On the Cycles Cornell boxes
+//    and zdm2 the bench's error per second (error² × time) is best there; at 48 the Cornell
+//    quad's lightmap error rises 16% and zdm2's indirect light gains 44% (the bounce series
+//    of a bright level over-amplifies on few voxels), at 128 the error falls ≤ 5% for 2.5×
+//    the time.
+//  * each point or spot light's clearance, its distance to the nearest surface: a light less
+//    than about half a voxel from a surface falls into that surface's voxel layer and loses
+//    most of the light it gives the bounces (a point light 0.32 voxel under a ceiling: −21% of
+//    the room's first bounce, 0.16 voxel: −60%; 0.64 voxel and more: within the coarse grid's
+//    own +1…+7%). The voxels are made fine enough that every light clears one voxel.
+//  * the memory budget: never finer than what fits in the memory available
+//    (bake.h checkMemoryBudget's estimate), and never more than kMaxRefinement times finer
+//    than the size rule, so a light placed on a surface cannot make a bake of billions of
+//    voxels; either limit is a warning naming the light it leaves unresolved.
+// Measured not to need voxels, so they do not set the size: walls thinner than a voxel (the
+// dark one of two sealed rooms keeps 0.27–0.30% of the lit one's light for walls 1/16 to 1
+// voxel thick: each side of a wall gathers and reflects on its own), emissive surfaces of any
+// size or distance from a surface (their light is integrated over their triangles exactly),
+// and the lightmap texels (the direct light is exact per texel and the indirect is gathered
+// on 8-voxel cells, not per texel).
+#pragma once
+
+#include "bake/bake_settings.h"
+#include "scene/scene.h"
+
+#include <string>
+#include <vector>
+
+namespace vl {
+
+constexpr int kSceneVoxels = 63;      // the size rule: an odd count (voxelize.h voxelSizeFor)
+constexpr int kMaxRefinement = 8;     // the clearance rule goes at most this much finer
+
+struct LightClearance {
+    std::string light;
+    double metres = 0.0;  // distance from the light to the nearest triangle
+};
+
+struct VoxelSizeChoice {
+    double voxelSize = 0.0;      // metres
+    int voxelsAlongLongest = 0;  // the scene's longest side in voxels (odd)
+    std::string setBy;           // what set it, in words: "the scene's size", "light 'lamp' …"
+    std::vector<LightClearance> clearances;  // every point and spot light, nearest first
+    std::vector<std::string> warnings;       // features the size leaves unresolved
+};
+
+// The choice for `scene` (in its local frame) under `settings`; a user's voxel-size or
+// resolution is returned as set (setBy says so). Throws InputError for a scene without
+// triangles or with a non-finite position (voxelSizeFor's checks), SettingsError when not even
+// the size rule fits in memory.
+VoxelSizeChoice chooseVoxelSize(const Scene& scene, const BakeSettings& settings);
+
+// "4.9 cm", "1.25 m", "0.56 mm": a length as a person reads it.
+std::string lengthText(double metres);
+
+// "voxel size 8.88 mm (63 along the longest side), set by …": the progress line.
+std::string describeVoxelSize(const VoxelSizeChoice& choice);
+
+}  // namespace vl
