@@ -130,7 +130,7 @@ double totalSeconds(const std::vector<StageTime>& stages) {
 BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnostics) {
     validateBakeSettings(settings);
     BakeResult result;
-    result.voxelSizeChoice = chooseVoxelSize(scene, settings);
+    result.voxelSizeChoice = timed(result.stages, "voxel size", [&] { return chooseVoxelSize(scene, settings); });
     const VoxelSizeChoice& choice = result.voxelSizeChoice;
     VoxelSettings voxelSettings = settings.voxel;
     voxelSettings.voxelSize = choice.voxelSize;

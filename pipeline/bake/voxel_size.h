@@ -3,11 +3,15 @@
 // bench measures at its best error-per-second point (README "A voxel size the scene needs").
 //
 // Features, each measured by what it does to the bake as the voxels coarsen:
-//  * the scene's size: kSceneVoxels voxels along its longest side. On the Cycles Cornell boxes
-//    and zdm2 the bench's error per second (error² × time) is best there; at 48 the Cornell
-//    quad's lightmap error rises 16% and zdm2's indirect light gains 44% (the bounce series
-//    of a bright level over-amplifies on few voxels), at 128 the error falls ≤ 5% for 2.5×
-//    the time.
+//  * the scene's size: kSceneVoxels voxels along its longest side. The bench's error per
+//    second (error² × time, `voxlight bench` with its resolution points, 2026-11-24) is best
+//    there or within 7% of the best on both Cycles Cornell boxes and scenes/two_rooms.gltf
+//    (whose best is 47 voxels by 3% / 12%); on zdm2 it is flat from 63 to 127 voxels (within
+//    3%, the reference's noise taken out) while the error falls from 29% to 21%. Coarser, the
+//    error climbs: at 47 voxels the Cornell quad's lightmap error is 16% higher and zdm2's
+//    indirect light 44% too bright (the bounce series of a bright level over-amplifies on few
+//    voxels). Tried and not taken: 6 voxels along the median free path between surfaces
+//    (103 on zdm2: 28.0% image error against 31.3%, but 1.2× the error² × time).
 //  * each point or spot light's clearance, its distance to the nearest surface: a light less
 //    than about half a voxel from a surface falls into that surface's voxel layer and loses
 //    most of the light it gives the bounces (a point light 0.32 voxel under a ceiling: −21% of
@@ -19,10 +23,12 @@
 //    voxels; either limit is a warning naming the light it leaves unresolved.
 // Measured not to need voxels, so they do not set the size: walls thinner than a voxel (the
 // dark one of two sealed rooms keeps 0.27–0.30% of the lit one's light for walls 1/16 to 1
-// voxel thick: each side of a wall gathers and reflects on its own), emissive surfaces of any
-// size or distance from a surface (their light is integrated over their triangles exactly),
-// and the lightmap texels (the direct light is exact per texel and the indirect is gathered
-// on 8-voxel cells, not per texel).
+// voxel thick: each side of a wall gathers and reflects on its own) and emissive surfaces of
+// any size or distance from a surface (their light is integrated over their triangles
+// exactly: a 1 cm emitter kept its first bounce within the coarse grid's own bias down to 16
+// voxels across its room). Nor, by construction, the lightmap's texel size: the direct light
+// is exact per texel and the indirect light is gathered on 8-voxel cells whatever the texels
+// (not measured against a finer reference: the Cycles references are 256² only).
 #pragma once
 
 #include "bake/bake_settings.h"

@@ -376,9 +376,12 @@ void writePlot(BenchResult& r, const BenchOptions& options) {
 
 // ---- headline and Markdown ----
 
+// "2.3×", "16×", "220×": two significant digits, never an exponent.
+std::string timesText(double ratio) { return ratio < 100.0 ? fmt("%.2g×", ratio) : fmt("%.0f×", ratio); }
+
 std::string reachText(const Reach& reach, double vctSeconds) {
     if (!reach.found) return "—";
-    std::string s = secs(reach.seconds) + " s (" + fmt("%.2g×", reach.seconds / vctSeconds) + " the VCT time";
+    std::string s = secs(reach.seconds) + " s (" + timesText(reach.seconds / vctSeconds) + " the VCT time";
     if (reach.how != "interpolated") s += "; " + reach.how;
     return s + ")";
 }
@@ -387,7 +390,7 @@ std::string reachText(const Reach& reach, double vctSeconds) {
 // the VCT's time.
 std::string speedText(const Reach& reach, double vctSeconds) {
     const double ratio = reach.seconds / vctSeconds;
-    return ratio >= 1.0 ? "**" + fmt("%.2g×", ratio) + " faster**" : "**" + fmt("%.2g×", 1.0 / ratio) + " slower**";
+    return ratio >= 1.0 ? "**" + timesText(ratio) + " faster**" : "**" + timesText(1.0 / ratio) + " slower**";
 }
 
 // The default's voxel size against the points that change only the resolution, by error² ×
@@ -482,7 +485,7 @@ nlohmann::json headline(const BenchResult& r, std::string& markdown) {
             if (same.found) lines << ": the VCT is " << speedText(same, t) << " at equal " << o.name << " error";
             if (atTime.found)
                 lines << "; at the VCT's " << secs(t) << " s its error is " << fmt("%.1f%%", 100.0 * atTime.seconds) << " ("
-                      << fmt("%.2g×", atTime.seconds / e) << " the VCT's"
+                      << timesText(atTime.seconds / e) << " the VCT's"
                       << (atTime.how != "interpolated" ? "; " + atTime.how : "") << ")";
             lines << ".\n";
         }
@@ -548,7 +551,9 @@ std::string scalingMarkdown(const StageScaling& s, const BenchOptions& options) 
     md << "## How the stages scale\n\n";
     md << "Scene `" << fs::path(s.scenePath).filename().string() << "`, the bench's base settings with voxel resolution "
        << axisValues(s.resolutionAxis, true) << " (lightmap " << base.lightmap.width << "²) and lightmap resolution "
-       << axisValues(s.lightmapAxis, false) << " (resolution " << base.voxel.resolution << "), image "
+       << axisValues(s.lightmapAxis, false) << " (resolution "
+       << (base.voxel.resolution > 0 ? std::to_string(base.voxel.resolution) : std::string("chosen from the scene"))
+       << "), image "
        << base.imageWidth << "×" << base.imageHeight << ". Each run bakes in memory (no files) on " << s.threads
        << " threads, " << s.axes.repeats << " times (once when its first bake takes over "
        << fmt("%.0f", s.axes.repeatLimitSeconds)

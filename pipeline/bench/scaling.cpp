@@ -23,7 +23,9 @@ constexpr double kSameWorkRatio = 1.1;
 constexpr double kNotableTimeRatio = 1.5;
 
 std::string runLabel(int resolution, int lightmapResolution) {
-    return "resolution=" + std::to_string(resolution) + " lightmap-res=" + std::to_string(lightmapResolution);
+    // 0: the voxel size the bake chooses from the scene (bake/voxel_size.h).
+    return "resolution=" + (resolution > 0 ? std::to_string(resolution) : std::string("auto")) +
+           " lightmap-res=" + std::to_string(lightmapResolution);
 }
 
 // Keeps each stage's fastest time over the bakes.
