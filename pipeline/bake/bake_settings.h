@@ -48,15 +48,12 @@ struct BakeSettings {
     // surface side of each block of 2^level voxels per axis, interpolated at every texel,
     // pixel sample and voxel. The bounces gather at bounceGatherLevel, the receivers at
     // gatherLevel (−1: every receiver sample gathers its own cones, as a reference for the
-    // interpolation's error). The receivers gather at level 2: at the default 63 voxels it
-    // costs no more time than level 3 (fewer voxels, more points) and errs less everywhere
-    // measured (lightmap / image relative RMSE, `voxlight bench … --vct 'gather-level=3'`,
-    // 2026-11-24): Cycles quad box 4.7% / 5.4% against 4.9% / 5.7%, point box 5.7% / 6.3%
-    // against 5.8% / 6.5%, scenes/two_rooms.gltf 2.8% / 2.5% against 3.4% / 2.5%, zdm2's
-    // image 29.3% against 31.3%. Every sample (−1) is slower and no better. The interpolation
-    // averages the cone sets of several points, each turned its own way, and that average
-    // errs less than any one set.
-    int gatherLevel = 2;
+    // interpolation's error). On the Cycles Cornell boxes (lightmap / image relative RMSE,
+    // quad; point): gather level 3: 5.82% / 7.87%; 7.56% / 8.67%. Level 2: 5.91% / 7.88%;
+    // 7.76% / 8.99%. Every sample: 6.42% / 8.54%; 9.05% / 10.83%. Bounces at level 2 instead of
+    // 3: 5.85% / 7.86%; 7.63% / 8.69%. The interpolation averages the cone sets of several
+    // points, each turned its own way, and that average errs less than any one set.
+    int gatherLevel = 3;
     int bounceGatherLevel = 3;
     // Cone sets per gather point of the final gather, turned by 1/n turn from one another
     // (irradiance_cache.h gatherAtPoint): 2 halve the gaps between the cones that a small

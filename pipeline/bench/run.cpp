@@ -174,14 +174,14 @@ std::vector<BenchPointSpec> benchSweep(bool full) {
         each("step-factor", {"1"});
         each("normal-weights", {"lambert", "villegas"});
         each("bounces", {"0", "2", "4"});
-        each("gather-level", {"-1", "3"});  // -1: every receiver sample gathers its own cones (slower)
+        each("gather-level", {"-1", "2"});  // -1: every receiver sample gathers its own cones (slower)
         each("gather-turns", {"1"});
         each("bounce-gather-level", {"2"});
         each("voxel-emitter-strata", {"2"});
     } else {
         each("resolution", {"48", "96", "128"});
         each("gather-turns", {"1"});
-        each("gather-level", {"3"});
+        each("gather-level", {"2"});
         each("bounces", {"2"});
     }
     vct("resolution=48 gather-turns=1", {{"resolution", "48"}, {"gather-turns", "1"}});  // the fast end
