@@ -75,8 +75,9 @@ Scene twoRooms(float wallThickness) {
 // (the emitter, reference > 5, excluded) within 10% relative RMSE, the indirect part alone
 // (Cycles' total − direct: its converged path-traced indirect) within 20%; since the bright
 // patches (bake/bright_patches.h) within 6%, 7% and 12.5%. Measured at the defaults (quad /
-// point): lightmap 4.74% / 5.56%, image 5.39% / 5.90%, indirect 9.9% / 11.3% (without the
-// patches 5.31% / 8.18%, 6.45% / 9.43%, 11.2% / 16.8%).
+// point, 63 voxels): lightmap 4.95% / 5.82%, image 5.69% / 6.55%, indirect 10.4% / 11.9%; at
+// 127 voxels, the default before the voxel size was chosen per scene: 4.74% / 5.56%, 5.39% /
+// 5.90%, 9.9% / 11.3% (without the patches 5.31% / 8.18%, 6.45% / 9.43%, 11.2% / 16.8%).
 TEST_CASE("The default bake of the Cycles Cornell boxes matches Cycles' lightmaps and renders", "[bake]") {
     VL_SKIP_WITHOUT_SHARED();
     const std::string dir = sharedDir() + "/reference/";
