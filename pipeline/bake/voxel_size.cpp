@@ -2,6 +2,7 @@
 
 #include "bake/bake.h"
 #include "core/error.h"
+#include "core/math.h"
 #include "voxel/voxelize.h"
 
 #include <tbb/blocked_range.h>
@@ -61,6 +62,77 @@ double distanceToNearestTriangle(const std::vector<TriangleRef>& triangles, cons
     return std::sqrt(nearestSquared);
 }
 
+// The longest side of the scene's box in its own frame: the axes of its two most common
+// surface orientations (area-weighted; a normal and its opposite are one orientation), or the
+// axis-aligned box where that is no shorter. Why: a room modelled at an angle to the world axes
+// has axis-aligned bounds up to √3 times its own size, and a voxel size taken from those gave
+// the turned Cycles Cornell boxes as few as 36 voxels across themselves (lightmap error over 16
+// random turns: quad mean 7.0%, point 10.9%, unturned 4.9% / 5.8%).
+double ownFrameLongestSide(const Scene& scene, double axisAlignedLongest) {
+    constexpr int kBins = 32;  // per side of the octahedral map of orientations
+    struct Face {
+        glm::dvec3 normal;  // unit, its largest component positive (one per orientation)
+        double area;
+    };
+    std::vector<Face> faces;
+    for (const Mesh& mesh : scene.meshes)
+        for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+            const glm::dvec3 a(mesh.positions[mesh.indices[3 * t]]), b(mesh.positions[mesh.indices[3 * t + 1]]),
+                c(mesh.positions[mesh.indices[3 * t + 2]]);
+            glm::dvec3 n = glm::cross(b - a, c - a);
+            const double twiceArea = glm::length(n);
+            if (!(twiceArea > 0.0)) continue;
+            n /= twiceArea;
+            int axis = 0;
+            for (int k = 1; k < 3; ++k)
+                if (std::abs(n[k]) > std::abs(n[axis])) axis = k;
+            if (n[axis] < 0.0) n = -n;
+            faces.push_back({n, 0.5 * twiceArea});
+        }
+    // The area-weighted mean orientation of the fullest bin of those faces `take` accepts.
+    const auto dominant = [&](auto&& take, glm::dvec3& axis) {
+        std::vector<double> area(kBins * kBins, 0.0);
+        std::vector<glm::dvec3> sum(kBins * kBins, glm::dvec3(0.0));
+        for (const Face& f : faces) {
+            if (!take(f.normal)) continue;
+            glm::dvec3 p = f.normal / (std::abs(f.normal.x) + std::abs(f.normal.y) + std::abs(f.normal.z));
+            if (p.z < 0.0) {
+                const double x = (1.0 - std::abs(p.y)) * (p.x < 0.0 ? -1.0 : 1.0);
+                p.y = (1.0 - std::abs(p.x)) * (p.y < 0.0 ? -1.0 : 1.0);
+                p.x = x;
+            }
+            const int i = std::min(kBins - 1, int((p.x + 1.0) * 0.5 * kBins));
+            const int j = std::min(kBins - 1, int((p.y + 1.0) * 0.5 * kBins));
+            area[j * kBins + i] += f.area;
+            sum[j * kBins + i] += f.area * f.normal;
+        }
+        const size_t best = size_t(std::max_element(area.begin(), area.end()) - area.begin());
+        if (!(area[best] > 0.0)) return false;
+        axis = glm::normalize(sum[best]);
+        return true;
+    };
+    glm::dvec3 first, second;
+    if (!dominant([](const glm::dvec3&) { return true; }, first)) return axisAlignedLongest;
+    if (dominant([&](const glm::dvec3& n) { return std::abs(glm::dot(n, first)) < 0.1; }, second)) {
+        second = glm::normalize(second - glm::dot(second, first) * first);
+    } else {
+        vec3 t, b;
+        orthonormalBasis(vec3(first), t, b);
+        second = glm::dvec3(t);
+    }
+    const glm::dvec3 third = glm::cross(first, second);
+    glm::dvec3 lower(std::numeric_limits<double>::infinity()), upper(-std::numeric_limits<double>::infinity());
+    for (const Mesh& mesh : scene.meshes)
+        for (const vec3& v : mesh.positions) {
+            const glm::dvec3 q(glm::dot(glm::dvec3(v), first), glm::dot(glm::dvec3(v), second),
+                               glm::dot(glm::dvec3(v), third));
+            lower = glm::min(lower, q);
+            upper = glm::max(upper, q);
+        }
+    const glm::dvec3 side = upper - lower;
+    return std::min(axisAlignedLongest, std::max(side.x, std::max(side.y, side.z)));
+}
+
 // The smallest odd count ≥ x, and the largest odd count ≤ x (at least 1).
 int oddAtLeast(double x) {
     const double whole = std::ceil(std::min(x, double(1 << 21)));
@@ -98,9 +170,13 @@ VoxelSizeChoice chooseVoxelSize(const Scene& scene, const BakeSettings& settings
         choice.voxelSize = sizeRuleVoxel;
         choice.setBy = settings.voxel.voxelSize > 0.0 ? "the voxel-size setting" : "the resolution setting";
     } else {
-        int voxels = kSceneVoxels;
+        // The own frame counts where it is shorter by more than rounding: an axis-aligned
+        // scene keeps exactly kSceneVoxels in every quarter turn.
+        const double ownLongest = ownFrameLongestSide(scene, longest);
+        const bool turned = ownLongest < longest * (1.0 - 1e-4);
+        int voxels = turned ? oddAtLeast(longest / (ownLongest / kSceneVoxels)) : kSceneVoxels;
         choice.setBy = "the scene's size (" + std::to_string(kSceneVoxels) + " voxels along its longest side, " +
-                       lengthText(longest) + ")";
+                       lengthText(turned ? ownLongest : longest) + (turned ? ", in its own frame)" : ")");
         const LightClearance* nearest = choice.clearances.empty() ? nullptr : &choice.clearances.front();
         if (nearest && nearest->metres > 0.0 && longest / nearest->metres > voxels) {
             voxels = std::min(oddAtLeast(longest / nearest->metres), kMaxRefinement * (kSceneVoxels + 1) - 1);

@@ -3,7 +3,9 @@
 // bench measures at its best error-per-second point (README "A voxel size the scene needs").
 //
 // Features, each measured by what it does to the bake as the voxels coarsen:
-//  * the scene's size: kSceneVoxels voxels along its longest side. The bench's error per
+//  * the scene's size: kSceneVoxels voxels along its longest side, measured in its own frame
+//    (the axes of its most common surface orientations) so a scene modelled at an angle to
+//    the world axes gets the voxels it would get unturned. The bench's error per
 //    second (error² × time, `voxlight bench` with its resolution points, 2026-11-24) is best
 //    there or within 7% of the best on both Cycles Cornell boxes and scenes/two_rooms.gltf
 //    (whose best is 47 voxels by 3% / 12%); on zdm2 it is flat from 63 to 127 voxels (within

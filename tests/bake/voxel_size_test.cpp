@@ -7,6 +7,7 @@
 #include "quad_scene.h"
 
 #include <catch2/catch.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <cmath>
 #include <filesystem>
@@ -47,6 +48,27 @@ TEST_CASE("The default voxel size puts 63 voxels along the scene's longest side"
     CHECK(choice.voxelsAlongLongest == 63);
     CHECK_THAT(choice.setBy, Catch::Contains("the scene's size"));
     CHECK(choice.warnings.empty());
+}
+
+TEST_CASE("A room turned at an angle to the world axes gets the voxel size of the room unturned", "[bake]") {
+    // Its axis-aligned bounds grow with the turn; its own longest side (2 m) does not.
+    const Scene scene = roomWithLight(vec3(2.0f, 1.0f, 0.8f), vec3(1.0f, 0.5f, 0.4f));
+    const glm::mat3 turn = glm::mat3(glm::rotate(glm::mat4(1.0f), 0.5f, glm::normalize(vec3(1.0f, 2.0f, 0.5f))));
+    Scene turned = scene;
+    for (Mesh& mesh : turned.meshes) {
+        for (vec3& p : mesh.positions) p = turn * p;
+        for (vec3& n : mesh.normals) n = turn * n;
+    }
+    turned.lights[0].position = turn * turned.lights[0].position;
+    const VoxelSizeChoice choice = chooseVoxelSize(turned, quietSettings());
+    const vec3 bounds = turned.bounds().extent();
+    INFO("turned bounds " << bounds.x << " × " << bounds.y << " × " << bounds.z);
+    REQUIRE(maxComponent(bounds) > 2.1f);
+    // The count along the longer bounds is rounded up to an odd number: the size is at most
+    // the unturned one and within one voxel of it.
+    CHECK(choice.voxelSize <= 2.0 / 63.0 * (1.0 + 1e-6));
+    CHECK(choice.voxelSize > 2.0 / 63.0 * (1.0 - 2.0 / choice.voxelsAlongLongest));
+    CHECK_THAT(choice.setBy, Catch::Contains("in its own frame"));
 }
 
 TEST_CASE("A light's clearance is its distance to the nearest triangle", "[bake]") {
