@@ -1,6 +1,8 @@
 // `voxlight voxelize scene.gltf -o grids.vdb`: glTF → sparse attribute grids in one .vdb.
 #include "tools/voxlight/commands.h"
 
+#include "bake/voxel_size.h"
+
 #include "core/error.h"
 #include "core/progress.h"
 #include "scene/gltf_loader.h"
@@ -21,7 +23,7 @@ struct VoxelizeOptions {
     std::string scene;
     std::string output;
     double voxelSize = 0.0;
-    int resolution = VoxelSettings{}.resolution;
+    int resolution = 1;  // read only when --resolution is given
     bool fillInterior = false;
     bool strict = false;
     bool quiet = false;
@@ -44,7 +46,8 @@ void runVoxelize(const VoxelizeOptions& options, bool voxelSizeGiven, bool resol
         throw SettingsError("voxelize: give either --voxel-size or --resolution, not both");
     if (voxelSizeGiven && !(options.voxelSize > 0.0 && std::isfinite(options.voxelSize)))
         throw SettingsError("voxelize: --voxel-size must be a positive number of metres");
-    if (options.resolution <= 0) throw SettingsError("voxelize: --resolution must be a positive voxel count");
+    if (resolutionGiven && options.resolution <= 0)
+        throw SettingsError("voxelize: --resolution must be a positive voxel count");
 
     const std::string output = options.output.empty()
         ? "output/" + std::filesystem::path(options.scene).stem().string() + ".vdb"
@@ -59,6 +62,13 @@ void runVoxelize(const VoxelizeOptions& options, bool voxelSizeGiven, bool resol
     settings.voxelSize = voxelSizeGiven ? options.voxelSize : 0.0;
     settings.resolution = options.resolution;
     settings.fillInterior = options.fillInterior;
+    if (!voxelSizeGiven && !resolutionGiven) {
+        // The voxel size a default bake of the scene would choose, so the grids match its.
+        const VoxelSizeChoice choice = chooseVoxelSize(scene, BakeSettings{});
+        settings.voxelSize = choice.voxelSize;
+        if (!options.quiet) std::fprintf(stderr, "%s\n", describeVoxelSize(choice).c_str());
+        for (const std::string& warning : choice.warnings) std::fprintf(stderr, "warning: %s\n", warning.c_str());
+    }
     VoxelizeStats stats;
     VoxelScene voxels;
     {
@@ -90,7 +100,8 @@ void addVoxelizeCommand(CLI::App& app) {
     cmd->add_option("-o,--output", options->output, "output .vdb (default: output/<scene name>.vdb)");
     auto* voxelSize = cmd->add_option("--voxel-size", options->voxelSize, "voxel size in metres");
     auto* resolution = cmd->add_option("--resolution", options->resolution,
-                                       "voxels along the scene's longest axis (default 128)");
+                                       "voxels along the scene's longest axis (default: the voxel size "
+                                       "`voxlight bake` would choose for the scene)");
     cmd->add_flag("--fill-interior", options->fillInterior, "also mark voxels inside closed meshes solid");
     cmd->add_flag("--strict", options->strict, "treat every warning as an error");
     cmd->add_flag("-q,--quiet", options->quiet, "no progress output");
