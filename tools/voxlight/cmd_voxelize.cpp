@@ -2,7 +2,6 @@
 #include "tools/voxlight/commands.h"
 
 #include "bake/voxel_size.h"
-
 #include "core/error.h"
 #include "core/progress.h"
 #include "scene/gltf_loader.h"
