@@ -58,7 +58,7 @@ nlohmann::json readJson(const fs::path& file) {
 CyclesPeer findCyclesPeer(const BenchOptions& options) {
     CyclesPeer peer;
     if (options.blender == "none") {
-        peer.why = "Cycles peer off (--blender none)";
+        peer.why = "Cycles peer off (--blender none, or --methods without cycles)";
         return peer;
     }
     peer.blender = options.blender.empty() ? onPath("blender") : options.blender;
