@@ -40,6 +40,11 @@ double surfaceArea(const Scene& scene) {
     return area;
 }
 
+// A surface crosses about 1 to √3 voxels per h² of area.
+double estimatedVoxels(const Scene& scene, double voxelSize) {
+    return 2.0 * surfaceArea(scene) / (voxelSize * voxelSize);
+}
+
 std::string gib(double bytes) {
     char text[32];
     std::snprintf(text, sizeof text, "%.1f GiB", bytes / (1024.0 * 1024.0 * 1024.0));
@@ -88,10 +93,9 @@ double availableMemoryBytes() {
 }
 
 double estimateBakeMemory(const Scene& scene, const BakeSettings& settings, double voxelSize) {
-    // A surface crosses about 1 to √3 voxels per h² of area; a voxel costs ~100 bytes of
-    // channels, as much again in voxelization fragments, and ~50 in mips. A receiver sample
-    // costs ~48 bytes, a texel or pixel ~64 per image kept.
-    const double voxels = 2.0 * surfaceArea(scene) / (voxelSize * voxelSize);
+    // A voxel costs ~100 bytes of channels, as much again in voxelization fragments, and ~50
+    // in mips. A receiver sample costs ~48 bytes, a texel or pixel ~64 per image kept.
+    const double voxels = estimatedVoxels(scene, voxelSize);
     const double texels = settings.outputs.lightmaps
         ? settings.lightmap.maxTexels() *
               (48.0 * settings.lightmap.subsamplesPerAxis * settings.lightmap.subsamplesPerAxis + 64.0 * 6)
@@ -105,7 +109,7 @@ double estimateBakeMemory(const Scene& scene, const BakeSettings& settings, doub
 
 void checkMemoryBudget(const Scene& scene, const BakeSettings& settings, double voxelSize) {
     const double estimate = estimateBakeMemory(scene, settings, voxelSize);
-    const double voxels = 2.0 * surfaceArea(scene) / (voxelSize * voxelSize);
+    const double voxels = estimatedVoxels(scene, voxelSize);
     const double available = availableMemoryBytes();
     if (estimate > available)
         throw SettingsError(scene.sourcePath + ": this bake would need about " + gib(estimate) + " of memory (" +

@@ -65,11 +65,11 @@ VL_HOSTDEV inline bool isBuried(const TraceSceneView& scene, const BvhView& bvh,
 // 3 × 3 × 3 around its lifted point that do not lie behind its own surface and lie in front
 // of the surfaces between: a ray from the centre back to the sample meets nothing before it,
 // and what it meets there it meets from the front. Nearest first (ties: z, y, x order), it
-// moves where its lifted point is that centre; `candidates` holds the moved samples, and the
+// moves where its lifted point is that centre; `moved` holds the moved positions, and the
 // count is returned.
 constexpr int kLookupCandidates = 27;
 VL_HOSTDEV inline int lookupCandidates(const TraceSceneView& scene, const BvhView& bvh, const MipView& mips,
-                                       const SurfaceSample& r, SurfaceSample (&candidates)[kLookupCandidates]) {
+                                       const SurfaceSample& r, vec3 (&moved)[kLookupCandidates]) {
     if (mips.levelCount == 0 || !mips.levels[0].index) return 0;
     const MipLevelView& occupancy = mips.levels[0];
     const float h = mips.voxelSize;
@@ -104,11 +104,10 @@ VL_HOSTDEV inline int lookupCandidates(const TraceSceneView& scene, const BvhVie
                 int k = count++;
                 for (; k > 0 && distances[k - 1] > distance; --k) {
                     distances[k] = distances[k - 1];
-                    candidates[k] = candidates[k - 1];
+                    moved[k] = moved[k - 1];
                 }
                 distances[k] = distance;
-                candidates[k] = r;
-                candidates[k].position = r.position + (candidate - lifted);
+                moved[k] = r.position + (candidate - lifted);
             }
     return count;
 }
@@ -131,16 +130,16 @@ VL_HOSTDEV inline vec3 indirectIrradiance(const TraceSceneView& scene, const Bvh
                                           const ConeSettings& cone, const SurfaceSample& sample, uint64_t seed) {
     vec3 E;
     if (cache && interpolateIrradiance(*cache, sample.position, sample.normal, E)) return E;
-    SurfaceSample moved[kLookupCandidates];
+    vec3 moved[kLookupCandidates];
     const int count = lookupCandidates(scene, bvh, mips, sample, moved);
     if (cache)
         for (int k = 0; k < count; ++k)
-            if (interpolateIrradiance(*cache, moved[k].position, moved[k].normal, E)) return E;
-    const SurfaceSample& r = count > 0 ? moved[0] : sample;
+            if (interpolateIrradiance(*cache, moved[k], sample.normal, E)) return E;
+    const vec3 position = count > 0 ? moved[0] : sample.position;
     vec3 tangent;
     float positionTurn;
-    gatherFrame(r.position, r.normal, mips.centre(), mips.voxelSize, tangent, positionTurn);
-    return coneTraceIrradiance(mips, r.position, r.normal, set, cone, nullptr, coneTurn(seed), &tangent);
+    gatherFrame(position, sample.normal, mips.centre(), mips.voxelSize, tangent, positionTurn);
+    return coneTraceIrradiance(mips, position, sample.normal, set, cone, nullptr, coneTurn(seed), &tangent);
 }
 
 // Samples [first, last) of `samples`; a sample's index seeds its direct term's strata and

@@ -158,11 +158,13 @@ VoxelSizeChoice chooseVoxelSize(const Scene& scene, const BakeSettings& settings
     const double longest = std::max<double>(extent.x, std::max<double>(extent.y, extent.z));
 
     std::vector<TriangleRef> triangles;
-    for (const Mesh& mesh : scene.meshes)
-        for (size_t t = 0; t < mesh.triangleCount(); ++t) triangles.push_back({&mesh, t});
-    for (const Light& light : scene.lights)
-        if (light.type == LightType::Point || light.type == LightType::Spot)
-            choice.clearances.push_back({light.name, distanceToNearestTriangle(triangles, glm::dvec3(light.position))});
+    for (const Light& light : scene.lights) {
+        if (light.type != LightType::Point && light.type != LightType::Spot) continue;
+        if (triangles.empty())
+            for (const Mesh& mesh : scene.meshes)
+                for (size_t t = 0; t < mesh.triangleCount(); ++t) triangles.push_back({&mesh, t});
+        choice.clearances.push_back({light.name, distanceToNearestTriangle(triangles, glm::dvec3(light.position))});
+    }
     std::stable_sort(choice.clearances.begin(), choice.clearances.end(),
                      [](const LightClearance& a, const LightClearance& b) { return a.metres < b.metres; });
 
@@ -179,11 +181,11 @@ VoxelSizeChoice chooseVoxelSize(const Scene& scene, const BakeSettings& settings
                        lengthText(turned ? ownLongest : longest) + (turned ? ", in its own frame)" : ")");
         const LightClearance* nearest = choice.clearances.empty() ? nullptr : &choice.clearances.front();
         if (nearest && nearest->metres > 0.0 && longest / nearest->metres > voxels) {
-            voxels = std::min(oddAtLeast(longest / nearest->metres), kMaxRefinement * (kSceneVoxels + 1) - 1);
+            voxels = std::min(oddAtLeast(longest / nearest->metres), kMaxChosenVoxels);
             choice.setBy = "light '" + nearest->light + "', " + lengthText(nearest->metres) +
                            " from the nearest surface (at least one voxel between them)";
         } else if (nearest && nearest->metres <= 0.0) {
-            voxels = kMaxRefinement * (kSceneVoxels + 1) - 1;
+            voxels = kMaxChosenVoxels;
             choice.setBy = "light '" + nearest->light + "', which lies on a surface";
         }
         // The finest voxel the memory holds: the estimate is ∝ 1/h² past its fixed part.

@@ -42,7 +42,8 @@
 namespace vl {
 
 constexpr int kSceneVoxels = 63;      // the size rule: an odd count (voxelize.h voxelSizeFor)
-constexpr int kMaxRefinement = 8;     // the clearance rule goes at most this much finer
+constexpr int kMaxRefinement = 8;     // the finer rules go at most this much finer
+constexpr int kMaxChosenVoxels = kMaxRefinement * (kSceneVoxels + 1) - 1;  // 511, odd
 
 struct LightClearance {
     std::string light;

@@ -27,14 +27,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-BakeSettings quietSettings() {
-    BakeSettings settings;
-    settings.quiet = true;
-    settings.outputs.images = false;
-    settings.outputs.grids = false;
-    return settings;
-}
-
 const BakedLightmap& lightmapNamed(const BakeResult& result, const std::string& name) {
     for (const BakedLightmap& l : result.lightmaps)
         if (l.name == name) return l;

@@ -1,8 +1,9 @@
 // Scenes of axis-aligned rooms built in code for bake tests: every wall is its own mesh with
 // TEXCOORD_1 covering [0,1]², so per-mesh lightmaps (LightmapSettings::atlasPerMesh) name
-// each wall.
+// each wall; and the quiet, lightmap-only settings most bake tests start from.
 #pragma once
 
+#include "bake/bake_settings.h"
 #include "scene/scene.h"
 
 #include <string>
@@ -50,6 +51,15 @@ inline Light pointLightAt(vec3 position, float wattsPerSr) {
     light.position = position;
     light.intensity = wattsPerSr;
     return light;
+}
+
+// No progress output, no camera images, no grids.vdb: the lightmaps alone.
+inline BakeSettings quietSettings() {
+    BakeSettings settings;
+    settings.quiet = true;
+    settings.outputs.images = false;
+    settings.outputs.grids = false;
+    return settings;
 }
 
 }  // namespace vl::test

@@ -30,14 +30,6 @@ Scene roomWithLight(vec3 size, vec3 light) {
     return scene;
 }
 
-BakeSettings quietSettings() {
-    BakeSettings settings;
-    settings.quiet = true;
-    settings.outputs.images = false;
-    settings.outputs.grids = false;
-    return settings;
-}
-
 }  // namespace
 
 TEST_CASE("The default voxel size puts 63 voxels along the scene's longest side", "[bake]") {
