@@ -2,6 +2,7 @@
 
 #include "bake/bright_patches.h"
 #include "bake/dilate.h"
+#include "bake/ray_gather.h"
 #include "bake/shade_receivers.h"
 #include "bake/voxel_size.h"
 #include "cone/bounces.h"
@@ -170,13 +171,28 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
         if (onGpu) return cuda::lightVoxelsCuda(scene, result.voxels, settings.lighting);
         return lightVoxels(scene, result.voxels, settings.lighting, &progress);
     });
+    const SceneTriangles triangles = gatherTriangles(scene);
+    const Bvh bvh = timed(result.stages, "bvh", [&] { return Bvh::build(triangles); });
+    const TraceScene traceScene = TraceScene::build(scene, triangles);
+    const TraceSceneView sceneView = traceScene.view();
+    const BvhView bvhView = bvh.view();
+    const bool gathers = settings.bounces > 0 || (settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images));
+    result.gatherVisibility = timed(result.stages, "visibility", [&] {
+        return gathers ? chooseGatherVisibility(settings.gatherVisibility, result.voxels, settings.bounceGatherLevel, bvhView, sceneView) : GatherVisibilityChoice{};
+    });
+    if (!settings.quiet && gathers) std::fprintf(stderr, "%s\n", describeGatherVisibility(result.gatherVisibility).c_str());
+    const bool byRays = result.gatherVisibility.visibility == GatherVisibility::Rays;
+    const PointGatherer bounceRays = [&](const std::vector<GatherPoint>& points, const MipView& mips) {
+        return gatherByRays(points, mips, bvhView, sceneView, settings.bounceRays);
+    };
+
     RadianceMips bounced;          // the bounces' own mips, relit with their result
     IrradianceCache bouncePoints;  // and their gather points, linked over them
     timed(result.stages, "bounces", [&] {
         Progress progress("bounces", uint64_t(settings.bounces) * result.voxels.size(), settings.quiet);
         propagateBounces(result.voxels, bounceConeSettings(settings), settings.bounces, settings.bounceGatherLevel,
                          settings.bounceTail ? BounceTail::Geometric : BounceTail::None, &progress, &bounced,
-                         &bouncePoints);
+                         &bouncePoints, byRays ? &bounceRays : nullptr);
         return 0;
     });
     const bool reusePoints = bounced.levelCount() > 0 && settings.bounceGatherLevel == settings.gatherLevel;
@@ -184,11 +200,6 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
         return bounced.levelCount() > 0 ? std::move(bounced) : buildRadianceMips(result.voxels);
     });
     const MipView mipView = result.mips.view();
-    const SceneTriangles triangles = gatherTriangles(scene);
-    const Bvh bvh = timed(result.stages, "bvh", [&] { return Bvh::build(triangles); });
-    const TraceScene traceScene = TraceScene::build(scene, triangles);
-    const TraceSceneView sceneView = traceScene.view();
-    const BvhView bvhView = bvh.view();
 
     // The final gather, once for every receiver of every output.
     IrradianceCache cache;
@@ -205,7 +216,9 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
                 cache.link(mipView);
             }
             Progress progress("gather", cache.points().size(), settings.quiet);
-            if (onGpu)
+            if (byRays)
+                cache.setIrradiance(gatherByRays(cache.points(), mipView, bvhView, sceneView, settings.gatherRays, &progress));
+            else if (onGpu)
                 cache.setIrradiance(
                     cuda::gatherIrradianceCuda(cache.points(), mipView, settings.cone, settings.gatherTurns));
             else

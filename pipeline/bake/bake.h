@@ -6,6 +6,7 @@
 #pragma once
 
 #include "bake/bake_settings.h"
+#include "bake/ray_gather.h"
 #include "bake/receivers.h"
 #include "bake/voxel_size.h"
 #include "cone/irradiance_cache.h"
@@ -55,6 +56,7 @@ struct BakeResult {
     std::vector<StageTime> stages;
     size_t gatherPoints = 0;  // where the receivers' indirect light was gathered (0: at every sample)
     size_t brightPatches = 0;  // gathered by shadow rays at the gather points (bake/bright_patches.h)
+    GatherVisibilityChoice gatherVisibility;  // rays or cones, and why (bake/ray_gather.h)
 };
 
 // Checks that cost nothing (settings ranges, voxel count, memory) run first; throws

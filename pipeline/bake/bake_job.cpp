@@ -65,6 +65,8 @@ nlohmann::json reportJson(const BakeReport& report, const BakeSettings& settings
     json["mip_levels"] = report.mipLevels;
     json["gather_points"] = report.gatherPoints;
     json["bright_patches"] = report.brightPatches;
+    json["gather_visibility"] = toString(report.gatherVisibility.visibility);
+    json["gather_visibility_set_by"] = report.gatherVisibility.setBy;
     json["lightmap_texels"] = report.lightmapTexels;
     json["covered_texels"] = report.coveredTexels;
     json["pixels"] = report.pixels;
@@ -103,6 +105,7 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
     report.mipLevels = static_cast<size_t>(result.mips.levelCount());
     report.gatherPoints = result.gatherPoints;
     report.brightPatches = result.brightPatches;
+    report.gatherVisibility = result.gatherVisibility;
 
     const auto writeStart = std::chrono::steady_clock::now();
     StagedFiles files(staging, report);

@@ -40,6 +40,7 @@ struct BakeReport {
     size_t mipLevels = 0;
     size_t gatherPoints = 0;
     size_t brightPatches = 0;
+    GatherVisibilityChoice gatherVisibility;  // rays or cones, and why
     size_t lightmapTexels = 0;
     size_t coveredTexels = 0;
     size_t pixels = 0;

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <utility>
 
 namespace vl {
 namespace {
@@ -78,6 +79,12 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.brightPatches.cellVoxels = parseIntSetting("bright-patch-cell", v, 1, 1024); }},
         {"bright-patch-max", "most bright patches, the most powerful first (default 256)",
          [](S& s, const std::string& v) { s.brightPatches.maxPatches = parseIntSetting("bright-patch-max", v, 0, 65536); }},
+        {"gather-visibility", "what a gather point sees by: rays (against the triangles, reading the mips where they hit), cones (the mips' opacity) or auto (rays unless the scene's rays see the backs of single-sided surfaces) (default auto)",
+         [](S& s, const std::string& v) { s.gatherVisibility = parseGatherVisibility(v); }},
+        {"gather-rays", "rays per axis of each final-gather point's n x n fan when gathering by rays (default 16)",
+         [](S& s, const std::string& v) { s.gatherRays = parseIntSetting("gather-rays", v, 1, kMaxGatherRaysPerAxis); }},
+        {"bounce-rays", "rays per axis of each bounce gather point's n x n fan when gathering by rays (default 8)",
+         [](S& s, const std::string& v) { s.bounceRays = parseIntSetting("bounce-rays", v, 1, kMaxGatherRaysPerAxis); }},
         {"bounce-gather-level", "voxels interpolate bounce light gathered once per surface side of each block of 2^n voxels (default 3)",
          [](S& s, const std::string& v) { s.bounceGatherLevel = parseIntSetting("bounce-gather-level", v, 0, kMaxCacheLevel); }},
         // Receivers
@@ -139,6 +146,10 @@ void validateBakeSettings(const BakeSettings& s) {
     if (s.bounceGatherLevel < 0 || s.bounceGatherLevel > kMaxCacheLevel)
         throw SettingsError("setting bounce-gather-level = " + std::to_string(s.bounceGatherLevel) + " is outside 0.." +
                             std::to_string(kMaxCacheLevel));
+    for (const auto& [name, rays] : {std::pair<const char*, int>{"gather-rays", s.gatherRays}, {"bounce-rays", s.bounceRays}})
+        if (rays < 1 || rays > kMaxGatherRaysPerAxis)
+            throw SettingsError(std::string("setting ") + name + " = " + std::to_string(rays) + " is outside 1.." +
+                                std::to_string(kMaxGatherRaysPerAxis));
     if (s.direct.emitterStrata < 1 || s.direct.emitterStrata > 64)
         throw SettingsError("setting emitter-strata = " + std::to_string(s.direct.emitterStrata) + " is outside 1..64");
 }
@@ -151,7 +162,8 @@ std::string describeBakeSettings(const BakeSettings& s) {
         << ", hdda=" << (s.lighting.traversal == VisibilityTraversal::Hdda) << ", cones=" << s.cone.coneCount
         << ", aperture=" << s.cone.apertureDegrees << ", cone-offset=" << s.cone.startOffset
         << ", step-factor=" << s.cone.stepFactor << ", bounces=" << s.bounces << ", bounce-cones=" << s.bounceCones << ", bounce-tail=" << s.bounceTail << ", gather-level=" << s.gatherLevel << ", gather-turns=" << s.gatherTurns << ", bright-patches=" << s.brightPatches.factor << ", bright-patch-cell=" << s.brightPatches.cellVoxels << ", bright-patch-max=" << s.brightPatches.maxPatches
-        << ", bounce-gather-level=" << s.bounceGatherLevel << ", lightmap-res=" << s.lightmap.width
+        << ", gather-visibility=" << toString(s.gatherVisibility) << ", gather-rays=" << s.gatherRays
+        << ", bounce-rays=" << s.bounceRays << ", bounce-gather-level=" << s.bounceGatherLevel << ", lightmap-res=" << s.lightmap.width
         << ", lightmap-subsamples=" << s.lightmap.subsamplesPerAxis << ", emitter-strata=" << s.direct.emitterStrata
         << ", width=" << s.imageWidth << ", height=" << s.imageHeight;
     if (s.lighting.attenuation)

@@ -4,6 +4,7 @@
 
 #include "bake/bright_patches.h"
 #include "bake/direct_light.h"
+#include "bake/gather_visibility.h"
 #include "bake/receivers.h"
 #include "bake/settings_table.h"
 #include "cone/cone_settings.h"
@@ -70,6 +71,14 @@ struct BakeSettings {
     // wide lit walls next to the receivers, where one shadow ray per patch is too coarse.
     // A gather at every sample (gather level −1) keeps all the light in the cones.
     BrightPatchSettings brightPatches;
+    // Rays or cones for the bounces' and the final gather's visibility (GatherVisibility), and
+    // the rays per axis of each point's n × n fan when rays: 16 × 16 at the final gather, 8 × 8
+    // at every bounce (bounce light is smooth, and every voxel interpolates several points).
+    // Lightmap / image relative RMSE on the Cycles Cornell boxes (quad; point), 63 voxels,
+    // 2026-11-24: cones 4.95% / 5.69%; 5.82% / 6.55%. Rays: see README "Rays for visibility".
+    GatherVisibility gatherVisibility = GatherVisibility::Auto;
+    int gatherRays = 16;
+    int bounceRays = 8;
     LightmapSettings lightmap;
     DirectLightSettings direct;
     int imageWidth = 256;

@@ -41,9 +41,9 @@
 
 namespace vl {
 
-constexpr int kSceneVoxels = 63;      // the size rule: an odd count (voxelize.h voxelSizeFor)
+constexpr int kSceneVoxels = 111;     // the size rule: an odd count (voxelize.h voxelSizeFor)
 constexpr int kMaxRefinement = 8;     // the finer rules go at most this much finer
-constexpr int kMaxChosenVoxels = kMaxRefinement * (kSceneVoxels + 1) - 1;  // 511, odd
+constexpr int kMaxChosenVoxels = kMaxRefinement * (kSceneVoxels + 1) - 1;  // 895, odd
 
 struct LightClearance {
     std::string light;

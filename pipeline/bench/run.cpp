@@ -166,25 +166,28 @@ std::vector<BenchPointSpec> benchSweep(bool full) {
     };
     vct("default", {});
     // The settings that move the default's time or error most: voxel resolution (around the
-    // default's own choice, so the report can rate it: bake/voxel_size.h), where and how
-    // often the final gather runs, and the bounces.
+    // default's own choice, so the report can rate it: bake/voxel_size.h), what decides the
+    // gathers' visibility (cones, the method before rays), the rays per gather, where the
+    // final gather runs, and the bounces.
     if (full) {
-        each("resolution", {"32", "48", "96", "128", "192", "256"});
+        each("resolution", {"32", "48", "64", "96", "160", "224"});
+        each("gather-visibility", {"cones"});
+        each("gather-rays", {"8", "24"});
+        each("bounce-rays", {"4", "12"});
         each("cones", {"6", "16"});
-        each("step-factor", {"1"});
         each("normal-weights", {"lambert", "villegas"});
         each("bounces", {"0", "2", "4"});
         each("gather-level", {"-1", "2"});  // -1: every receiver sample gathers its own cones (slower)
-        each("gather-turns", {"1"});
         each("bounce-gather-level", {"2"});
         each("voxel-emitter-strata", {"2"});
     } else {
-        each("resolution", {"48", "96", "128"});
-        each("gather-turns", {"1"});
+        each("resolution", {"64", "96", "160"});
+        each("gather-visibility", {"cones"});
+        each("gather-rays", {"8"});
         each("gather-level", {"2"});
         each("bounces", {"2"});
     }
-    vct("resolution=48 gather-turns=1", {{"resolution", "48"}, {"gather-turns", "1"}});  // the fast end
+    vct("resolution=48 gather-rays=8", {{"resolution", "48"}, {"gather-rays", "8"}});  // the fast end
     const std::vector<int> spp = full ? std::vector<int>{4, 16, 64, 256, 1024} : std::vector<int>{16, 64, 256};
     for (int s : spp) points.push_back({"path", "spp=" + std::to_string(s), {}, s});
     return points;

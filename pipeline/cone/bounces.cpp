@@ -132,7 +132,8 @@ SideWeights sideWeights(const VoxelScene& voxels, const IrradianceCacheView& cac
 }  // namespace
 
 void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces, int gatherLevel,
-                      BounceTail tail, Progress* progress, RadianceMips* resultMips, IrradianceCache* resultCache) {
+                      BounceTail tail, Progress* progress, RadianceMips* resultMips, IrradianceCache* resultCache,
+                      const PointGatherer* gatherer) {
     validateConeSettings(settings);
     if (bounces < 0 || bounces > kMaxBounces)
         throw SettingsError("bounces = " + std::to_string(bounces) + " is outside [0, " +
@@ -156,7 +157,10 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
         if (tail == BounceTail::Geometric && b == bounces - 1 && b >= 1) older = next;
         if (b > 0) mips.relight(voxels, isotropic(voxels, current), current);
         const MipView view = mips.view();
-        cache.gather(view, settings);
+        if (gatherer)
+            cache.setIrradiance((*gatherer)(cache.points(), view));
+        else
+            cache.gather(view, settings);
         tbb::parallel_for(size_t(0), weights.selfGathered.size(), [&](size_t k) {
             const size_t i = weights.selfGathered[k] / 6;
             const int side = static_cast<int>(weights.selfGathered[k] % 6);

@@ -34,6 +34,9 @@
 #include "cone/irradiance_cache.h"
 #include "voxel/voxel_scene.h"
 
+#include <functional>
+#include <vector>
+
 namespace vl {
 
 class Progress;
@@ -68,8 +71,12 @@ enum class BounceTail {
 // (RadianceMips::relight), without building the levels and index grids a second time.
 // `cache`, likewise, receives the bounces' gather points at gatherLevel, linked over those
 // mips (the topology a final gather at the same level builds and links again).
+// `gatherer`, when given, computes the irradiance at the gather points in place of their cones
+// (bake/ray_gather.h: rays against the triangles); sides no point applies to still gather
+// cones at the voxel.
+using PointGatherer = std::function<std::vector<vec3>(const std::vector<GatherPoint>& points, const MipView& mips)>;
 void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces, int gatherLevel,
                       BounceTail tail, Progress* progress = nullptr, RadianceMips* mips = nullptr,
-                      IrradianceCache* cache = nullptr);
+                      IrradianceCache* cache = nullptr, const PointGatherer* gatherer = nullptr);
 
 }  // namespace vl

@@ -73,7 +73,15 @@ Scene twoRooms(float wallThickness) {
 TEST_CASE("The default bake of the Cycles Cornell boxes matches Cycles' lightmaps and renders", "[bake]") {
     VL_SKIP_WITHOUT_SHARED();
     const std::string dir = sharedDir() + "/reference/";
-    for (const std::string name : {"quad", "point"}) {
+    // Issue 13's bounds: lightmap total, indirect and camera image relative RMSE. Measured
+    // (2026-11-24, 111 voxels, gathering by rays): quad 2.95% / 5.80% / 4.32%, point 2.99% /
+    // 6.01% / 3.90%.
+    struct Bounds {
+        const char* name;
+        double total, indirect, image;
+    };
+    for (const Bounds& bound : {Bounds{"quad", 0.030, 0.07, 0.05}, Bounds{"point", 0.045, 0.09, 0.05}}) {
+        const std::string name = bound.name;
         INFO("cornell_" << name);
         Scene scene = loadGltf(dir + "cornell_" + name + ".gltf");
         BakeSettings settings = quietSettings();
@@ -106,9 +114,9 @@ TEST_CASE("The default bake of the Cycles Cornell boxes matches Cycles' lightmap
         // (Cycles' 1024-spp lightmap shows 2.2% against the same reference).
         CHECK(direct.relativeRmse < 0.03);
         for (int c = 0; c < 3; ++c) CHECK(direct.meanTest[c] == Approx(direct.meanReference[c]).epsilon(0.005));
-        CHECK(total.relativeRmse < 0.06);
-        CHECK(indirect.relativeRmse < 0.125);
-        CHECK(image.relativeRmse < 0.07);
+        CHECK(total.relativeRmse < bound.total);
+        CHECK(indirect.relativeRmse < bound.indirect);
+        CHECK(image.relativeRmse < bound.image);
         for (int c = 0; c < 3; ++c) {
             CHECK(total.meanTest[c] == Approx(total.meanReference[c]).epsilon(0.05));
             CHECK(image.meanTest[c] == Approx(image.meanReference[c]).epsilon(0.05));
@@ -158,9 +166,11 @@ BakeResult bakeTwoRooms(double voxelSize, int resolution, int lightmapSize) {
 
 TEST_CASE("Light does not leak between the sealed bright rooms of scenes/two_rooms.gltf", "[bake]") {
     // Issue 13's measure at walls 0.5, 1 and 2 voxels thick: room B's mean lightmap value over
-    // room A's (face means over the six faces each). Measured (2026-11-24): 0.10%, 0.18%,
-    // 0.41%; the issue's goal is 0.3%, which the 2-voxel wall does not reach (README).
-    for (const auto& [voxelSize, bound] : {std::pair{0.2, 0.003}, std::pair{0.1, 0.003}, std::pair{0.05, 0.006}}) {
+    // room A's (face means over the six faces each), held to the issue's 0.3%. Measured
+    // (2026-11-24): 0.04%, 0%, 0% gathering by rays (bake/ray_gather.h); by cones 0.10%, 0.18%,
+    // 0.41%, the light entering through the coarse mip samples at the cones' far ends.
+    for (const double voxelSize : {0.2, 0.1, 0.05}) {
+        constexpr double bound = 0.003;
         const BakeResult result = bakeTwoRooms(voxelSize, 0, 32);
         double lit = 0.0, dark = 0.0;
         for (const BakedLightmap& l : result.lightmaps) (l.name[0] == 'A' ? lit : dark) += coveredMean(l) / 6.0;
@@ -198,8 +208,9 @@ TEST_CASE("A closed white box's indirect power stays within the mip alignment er
     // A cone reads walls through the mip hierarchy, and what a coarse voxel holds depends on
     // where the wall falls inside it: with 47 voxels across this box the walls sit in the
     // last voxel of their level-3 cells, with 49 in the first. Measured (2026-11-24), the
-    // indirect power is then 1.058 and 0.879 of the exact value (bounce-tail on; a single
-    // gather: +4% / −4%), their mean 0.968: cones do create energy at one alignment. The
+    // indirect power is then 1.022 and 0.917 of the exact value gathering by rays (by cones
+    // 1.058 and 0.879; a single gather: +4% / −4%), their mean 0.970: the bounces, which read
+    // the gather points' irradiance over the cells, do create energy at one alignment. The
     // bounds are those measurements with 2–3 points to spare, so that a change which widens
     // the alignment error, or tilts both alignments brighter (the mean above exact), fails;
     // they are not a derived limit.
@@ -244,6 +255,9 @@ TEST_CASE("A closed white box turned to any orientation keeps its indirect power
     // were lit by Lambert's cosine on their side's normal, the 30° turn about Y kept 72 % of
     // the first gather and 55 % of the series, and four random turns of the same room 59–76 %
     // and 42–60 % (measured on that code; the other three turns here were not run on it).
+    // Gathering by rays (2026-11-24), the series keeps 96–101 % over the four turns here; a
+    // ray that found no surface in the voxels it hit along one axis counted as black, and the
+    // same turns kept 61–77 %.
     constexpr float rho = 0.7f;
     const double emitted = kPi * 0.2 * 0.2;
     const glm::quat turns[] = {

@@ -32,12 +32,12 @@ Scene roomWithLight(vec3 size, vec3 light) {
 
 }  // namespace
 
-TEST_CASE("The default voxel size puts 63 voxels along the scene's longest side", "[bake]") {
+TEST_CASE("The default voxel size puts kSceneVoxels voxels along the scene's longest side", "[bake]") {
     // The light is 0.4 m from every wall: farther than a voxel, so the size rule alone decides.
     const Scene scene = roomWithLight(vec3(2.0f, 1.0f, 0.8f), vec3(1.0f, 0.5f, 0.4f));
     const VoxelSizeChoice choice = chooseVoxelSize(scene, quietSettings());
-    CHECK(choice.voxelSize == Approx(2.0 / 63.0).epsilon(1e-6));
-    CHECK(choice.voxelsAlongLongest == 63);
+    CHECK(choice.voxelSize == Approx(2.0 / kSceneVoxels).epsilon(1e-6));
+    CHECK(choice.voxelsAlongLongest == kSceneVoxels);
     CHECK_THAT(choice.setBy, Catch::Contains("the scene's size"));
     CHECK(choice.warnings.empty());
 }
@@ -58,8 +58,8 @@ TEST_CASE("A room turned at an angle to the world axes gets the voxel size of th
     REQUIRE(maxComponent(bounds) > 2.1f);
     // The count along the longer bounds is rounded up to an odd number: the size is at most
     // the unturned one and within one voxel of it.
-    CHECK(choice.voxelSize <= 2.0 / 63.0 * (1.0 + 1e-6));
-    CHECK(choice.voxelSize > 2.0 / 63.0 * (1.0 - 2.0 / choice.voxelsAlongLongest));
+    CHECK(choice.voxelSize <= 2.0 / kSceneVoxels * (1.0 + 1e-6));
+    CHECK(choice.voxelSize > 2.0 / kSceneVoxels * (1.0 - 2.0 / choice.voxelsAlongLongest));
     CHECK_THAT(choice.setBy, Catch::Contains("in its own frame"));
 }
 
@@ -138,10 +138,10 @@ TEST_CASE("The voxel size does not depend on where the scene sits or how big it 
 }
 
 TEST_CASE("Voxels chosen around a light 5 mm under a ceiling keep the bounce light it gives", "[bake]") {
-    // The first bounce alone (no voxel bounces): the room's mean indirect lightmap value. With
-    // the size rule's 63 voxels the light lies a third of a voxel under the ceiling, inside its
-    // voxel layer, and the ceiling's light is lost to the bounce (measured −21% of the room's
-    // first bounce); the chosen 201 voxels clear it. The reference is 255 voxels (1.3 voxels of
+    // The first bounce alone (no voxel bounces): the room's mean indirect lightmap value. At 63
+    // voxels the light lies a third of a voxel under the ceiling, inside its voxel layer, and
+    // the ceiling's light is lost to the bounce (measured −21% of the room's first bounce); the
+    // chosen size clears it by a voxel. The reference is 255 voxels (1.3 voxels of
     // clearance), which the coarse grid's own bias puts within 2% of the finest grids measured.
     const Scene scene = roomWithLight(vec3(1.0f), vec3(0.37f, 0.995f, 0.41f));
     auto firstBounce = [&](int resolution) {
@@ -179,8 +179,9 @@ TEST_CASE("bake.json says what set the voxel size and how far each light is from
     REQUIRE(report.ok);
     std::ifstream file(out / "bake.json");
     const std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-    CHECK_THAT(text, Catch::Contains("\"voxel_size_set_by\": \"the scene's size (63 voxels along its longest side") &&
-                         Catch::Contains("\"voxels_along_longest_side\": 63") &&
+    const std::string count = std::to_string(kSceneVoxels);
+    CHECK_THAT(text, Catch::Contains("\"voxel_size_set_by\": \"the scene's size (" + count + " voxels along its longest side") &&
+                         Catch::Contains("\"voxels_along_longest_side\": " + count) &&
                          Catch::Contains("\"light_clearances\"") && Catch::Contains("\"settings\": \"resolution=auto"));
     fs::remove_all(out);
 }

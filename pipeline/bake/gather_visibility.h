@@ -1,0 +1,20 @@
+// The choice between cones and rays for what a gather point sees (bake/ray_gather.h), as a
+// setting: small, so bake_settings.h stays light.
+#pragma once
+
+#include <string>
+
+namespace vl {
+
+// What decides which surfaces a gather point sees: cones compositing the mips' opacity, or
+// rays against the triangles. Auto: rays, unless more than kBackShareLimit of the rays from
+// the bounces' gather points (kProbeRaysPerAxis² each) hit the back of a single-sided surface,
+// which the voxels do not show; then cones.
+enum class GatherVisibility { Auto, Cones, Rays };
+GatherVisibility parseGatherVisibility(const std::string& text);  // SettingsError naming the choices
+const char* toString(GatherVisibility visibility);
+constexpr double kBackShareLimit = 0.05;
+constexpr int kProbeRaysPerAxis = 4;
+constexpr int kMaxGatherRaysPerAxis = 64;
+
+}  // namespace vl

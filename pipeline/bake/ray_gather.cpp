@@ -1,0 +1,210 @@
+#include "bake/ray_gather.h"
+
+#include "cone/cone_trace.h"
+#include "core/error.h"
+#include "core/progress.h"
+#include "core/sampling.h"
+#include "trace/bvh_traverse.h"
+#include "trace/ray_offset.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <cstdio>
+#include <string>
+
+namespace vl {
+
+namespace {
+
+void checkRays(int raysPerAxis) {
+    if (raysPerAxis < 1 || raysPerAxis > kMaxGatherRaysPerAxis)
+        throw SettingsError("gather rays " + std::to_string(raysPerAxis) + " per axis is outside 1.." +
+                            std::to_string(kMaxGatherRaysPerAxis));
+}
+
+// Where a point's rays start and the frame they are laid out in.
+struct RayFan {
+    vec3 origin, normal, tangent, bitangent;
+};
+
+RayFan rayFan(const GatherPoint& point, float h, const BvhView& bvh, const TraceSceneView& scene) {
+    RayFan fan;
+    fan.normal = point.normal;
+    const float angle = 2.0f * kPi * point.turn;
+    const vec3 across = glm::cross(point.normal, point.tangent);
+    fan.tangent = std::cos(angle) * point.tangent + std::sin(angle) * across;
+    fan.bitangent = glm::cross(point.normal, fan.tangent);
+    // The point's surface under it; where the point lies beyond the surface's edge (a cell that
+    // holds only the last column of a floor by a wall), under a point a voxel to one side.
+    const vec3 lifted = liftOffSurface(point.position, point.normal, h);
+    fan.origin = lifted;
+    const vec3 shifts[] = {vec3(0.0f), point.tangent, -point.tangent, across, -across};
+    for (const vec3& shift : shifts) {
+        Ray back;
+        back.origin = lifted + shift * h;
+        back.direction = -point.normal;
+        back.tMax = 3.0f * h;
+        Hit hit;
+        if (!intersectClosest(bvh, back, hit)) continue;
+        const vec3 n = surfaceAt(scene, hit.triangle, hit.b1, hit.b2).geometricNormal;
+        fan.origin = offsetRayOrigin(back.at(hit.t), glm::dot(n, point.normal) >= 0.0f ? n : -n, bvh.extent);
+        break;
+    }
+    return fan;
+}
+
+// The winding normal of a triangle, unnormalised (its direction is all the lookups need).
+vec3 windingNormal(const TraceSceneView& scene, uint32_t triangle) {
+    const vec3* v = scene.vertices + 3 * size_t(triangle);
+    return glm::cross(v[1] - v[0], v[2] - v[0]);
+}
+
+// Direction (i, j) of n × n, and its cosine to the normal.
+vec3 fanDirection(const RayFan& fan, int i, int j, int n, float& cosTheta) {
+    const vec3 d = sampleCosineHemisphere(vec2((float(i) + 0.5f) / float(n), (float(j) + 0.5f) / float(n)));
+    cosTheta = d.z;
+    return glm::normalize(d.x * fan.tangent + d.y * fan.bitangent + d.z * fan.normal);
+}
+
+// The radiance the voxels show a ray where it hits a surface of geometric normal n: along each
+// axis a (weight n_a²), the level-0 texel seen travelling the ray's way (radiance_mips.h) of
+// the voxel holding the hit or of its neighbour along a, whichever shows more surface; its
+// colour is radiance / coverage. n need not be unit. Only the voxels the surface itself passes through are read,
+// so nothing behind the surface (a thin wall's other room) is.
+vec3 hitRadiance(const MipLevelView& level0, IndexLeafCache& leaves, const Ray& ray, const Hit& hit, const vec3& n, float h) {
+    const ivec3 centre(glm::floor(ray.at(hit.t) / h + vec3(0.5f)));
+    vec3 sum(0.0f);
+    float weights = 0.0f;
+    const float length2 = glm::dot(n, n);
+    for (int a = 0; a < 3; ++a) {
+        const float w = n[a] * n[a];
+        if (!(w > 0.01f * length2)) continue;
+        const int face = 2 * a + (ray.direction[a] < 0.0f ? 1 : 0);
+        float best = 0.0f;
+        vec3 colour(0.0f);
+        for (int k = -1; k <= 1; ++k) {
+            ivec3 c = centre;
+            c[a] += k;
+            const int32_t index = leaves.value(*level0.index, nanovdb::Coord(c.x, c.y, c.z));
+            if (index < 0) continue;
+            const MipTexel& texel = level0.texels[size_t(index) * size_t(level0.facesPerVoxel) + size_t(face)];
+            if (texel.coverage > best) {
+                best = texel.coverage;
+                colour = texel.radiance / texel.coverage;
+            }
+        }
+        if (best > 0.0f) {
+            sum += w * colour;
+            weights += w;
+        }
+    }
+    return weights > 0.0f ? sum / weights : vec3(0.0f);
+}
+
+}  // namespace
+
+std::vector<vec3> gatherByRays(const std::vector<GatherPoint>& points, const MipView& mips, const BvhView& bvh,
+                               const TraceSceneView& scene, int raysPerAxis, Progress* progress) {
+    checkRays(raysPerAxis);
+    std::vector<vec3> irradiance(points.size(), vec3(0.0f));
+    if (mips.levelCount <= 0) return irradiance;
+    const float h = mips.voxelSize;
+    const int n = raysPerAxis;
+    const float rays = float(n * n);
+    const MipLevelView& level0 = mips.levels[0];
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
+        IndexLeafCache leaves;
+        for (size_t q = range.begin(); q != range.end(); ++q) {
+            const RayFan fan = rayFan(points[q], h, bvh, scene);
+            vec3 sum(0.0f);
+            for (int i = 0; i < n; ++i)
+                for (int j = 0; j < n; ++j) {
+                    float cosTheta;
+                    Ray ray;
+                    ray.origin = fan.origin;
+                    ray.direction = fanDirection(fan, i, j, n, cosTheta);
+                    Hit hit;
+                    if (!intersectClosest(bvh, ray, hit)) continue;
+                    sum += hitRadiance(level0, leaves, ray, hit, windingNormal(scene, hit.triangle), h);
+                }
+            irradiance[q] = sum * (kPi / rays);
+        }
+        if (progress) progress->advance(range.size());
+    });
+    return irradiance;
+}
+
+BackProbe probeSingleSidedBacks(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
+                                const TraceSceneView& scene, int raysPerAxis) {
+    checkRays(raysPerAxis);
+    const int n = raysPerAxis;
+    return tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, points.size(), 64), BackProbe(),
+        [&](const tbb::blocked_range<size_t>& range, BackProbe probe) {
+            for (size_t q = range.begin(); q != range.end(); ++q) {
+                const RayFan fan = rayFan(points[q], voxelSize, bvh, scene);
+                for (int i = 0; i < n; ++i)
+                    for (int j = 0; j < n; ++j) {
+                        float cosTheta;
+                        Ray ray;
+                        ray.origin = fan.origin;
+                        ray.direction = fanDirection(fan, i, j, n, cosTheta);
+                        Hit hit;
+                        if (!intersectClosest(bvh, ray, hit)) continue;
+                        ++probe.hits;
+                        if (glm::dot(ray.direction, windingNormal(scene, hit.triangle)) > 0.0f &&
+                            !scene.materials[scene.materialIds[hit.triangle]].doubleSided)
+                            ++probe.singleSidedBacks;
+                    }
+            }
+            return probe;
+        },
+        [](BackProbe a, const BackProbe& b) {
+            a.hits += b.hits;
+            a.singleSidedBacks += b.singleSidedBacks;
+            return a;
+        });
+}
+
+GatherVisibility parseGatherVisibility(const std::string& text) {
+    if (text == "auto") return GatherVisibility::Auto;
+    if (text == "cones") return GatherVisibility::Cones;
+    if (text == "rays") return GatherVisibility::Rays;
+    throw SettingsError("setting gather-visibility = '" + text + "' is not one of auto, cones, rays");
+}
+
+const char* toString(GatherVisibility visibility) {
+    switch (visibility) {
+        case GatherVisibility::Cones: return "cones";
+        case GatherVisibility::Rays: return "rays";
+        case GatherVisibility::Auto: break;
+    }
+    return "auto";
+}
+
+GatherVisibilityChoice chooseGatherVisibility(GatherVisibility requested, const VoxelScene& voxels, int gatherLevel,
+                                              const BvhView& bvh, const TraceSceneView& scene) {
+    GatherVisibilityChoice choice;
+    if (requested != GatherVisibility::Auto) {
+        choice.visibility = requested;
+        choice.setBy = "the gather-visibility setting";
+        return choice;
+    }
+    const IrradianceCache points(voxels, gatherLevel);
+    choice.probe = probeSingleSidedBacks(points.points(), float(voxels.voxelSize), bvh, scene, kProbeRaysPerAxis);
+    const double share = choice.probe.share();
+    choice.visibility = share > kBackShareLimit ? GatherVisibility::Cones : GatherVisibility::Rays;
+    char text[200];
+    std::snprintf(text, sizeof text, "%.1f%% of %llu probe rays hit the back of a single-sided surface (rays up to %.0f%%)",
+                  100.0 * share, static_cast<unsigned long long>(choice.probe.hits), 100.0 * kBackShareLimit);
+    choice.setBy = text;
+    return choice;
+}
+
+std::string describeGatherVisibility(const GatherVisibilityChoice& choice) {
+    return std::string("gather visibility: ") + toString(choice.visibility) + " (" + choice.setBy + ")";
+}
+
+}  // namespace vl

@@ -1,0 +1,165 @@
+// The gather by rays (bake/ray_gather.h): what a ray reads where it hits, and when the bake
+// chooses rays over cones.
+#include "bake/bake_settings.h"
+#include "bake/ray_gather.h"
+#include "core/error.h"
+#include "quad_scene.h"
+#include "trace/bvh.h"
+#include "trace/trace_scene.h"
+#include "voxel/voxelize.h"
+
+#include <catch2/catch.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+using namespace vl;
+using namespace vl::test;
+
+namespace {
+
+struct Traced {
+    SceneTriangles triangles;
+    Bvh bvh;
+    TraceScene scene;
+};
+
+Traced traced(const Scene& scene) {
+    Traced t;
+    t.triangles = gatherTriangles(scene);
+    t.bvh = Bvh::build(t.triangles);
+    t.scene = TraceScene::build(scene, t.triangles);
+    return t;
+}
+
+VoxelScene voxels(const Scene& scene, double voxelSize) {
+    VoxelSettings settings;
+    settings.voxelSize = voxelSize;
+    return voxelize(scene, settings);
+}
+
+}  // namespace
+
+TEST_CASE("Rays in a closed room whose every wall shows radiance L gather π·L at every point", "[bake]") {
+    // Every ray from inside a closed room hits a wall, and each wall's voxels show L to it:
+    // E = π·L exactly, whatever the point, the ray count or how the walls cut the voxels. A ray
+    // that read a voxel holding no surface on its side (a wall's edge, a corner) would read
+    // black and pull its point under π·L. (Corner voxels of the turned room also have sides
+    // facing out of it, from faces whose direction opposes the voxel's mean normal
+    // (voxel_scene.h voxelSides); their points look at nothing and are left out here.)
+    Scene scene;
+    scene.sourcePath = "room (test)";
+    const int white = addLambert(scene, vec3(0.5f));
+    const vec3 size(1.0f, 0.7f, 0.8f);
+    addRoom(scene, "room/", white, vec3(0.0f), size);
+    const glm::quat turn = glm::angleAxis(0.4f, glm::normalize(vec3(1.0f, 2.0f, 0.5f)));
+    for (Mesh& mesh : scene.meshes)  // a turn, so walls cross the voxel axes at a slant
+        for (vec3& p : mesh.positions) p = turn * p;
+    VoxelScene lit = voxels(scene, 1.0 / 29.0);
+    const vec3 L(0.2f, 0.5f, 1.0f);
+    lit.faceRadiance.assign(lit.size(), FaceRadiance{});
+    lit.radiance.assign(lit.size(), L);
+    for (size_t i = 0; i < lit.size(); ++i)
+        for (size_t f = 0; f < 6; ++f) lit.faceRadiance[i][f] = lit.axisWeights[i][f] > 0.0f ? L : vec3(0.0f);
+    const RadianceMips mips = buildRadianceMips(lit, lit.radiance, lit.faceRadiance);
+    const IrradianceCache cache(lit, 2);
+    const Traced t = traced(scene);
+    REQUIRE(cache.points().size() > 20);
+    for (int raysPerAxis : {4, 16}) {
+        const std::vector<vec3> E = gatherByRays(cache.points(), mips.view(), t.bvh.view(), t.scene.view(), raysPerAxis);
+        size_t inside = 0;
+        for (size_t q = 0; q < E.size(); ++q) {
+            const GatherPoint& point = cache.points()[q];
+            const vec3 local = glm::inverse(turn) * liftOffSurface(point.position, point.normal, float(lit.voxelSize));
+            if (glm::any(glm::lessThan(local, vec3(0.0f))) || glm::any(glm::greaterThan(local, size))) continue;
+            ++inside;
+            INFO(raysPerAxis << "² rays, point " << q << " at " << cache.points()[q].position.x << ", "
+                             << cache.points()[q].position.y << ", " << cache.points()[q].position.z);
+            // Within half a percent: a ray in 256 may pass the seam where two walls' meshes meet.
+            for (int c = 0; c < 3; ++c) CHECK(E[q][c] == Approx(kPi * L[c]).epsilon(0.005));
+        }
+        CHECK(inside > E.size() / 2);
+    }
+}
+
+TEST_CASE("Rays read nothing behind the surface they hit", "[bake]") {
+    // A lit wall (radiance L on its +X side) 1.5 voxels behind a dark one (no light) facing the
+    // same way: rays from in front of the dark wall hit it and must read its black, not the
+    // lit wall one and a half voxels behind (a trilinear read of the level around the hit
+    // would reach it).
+    Scene scene;
+    scene.sourcePath = "walls (test)";
+    const int white = addLambert(scene, vec3(0.5f));
+    const float h = 0.05f;
+    addQuad(scene, "dark", white, vec3(0.0f, -1.0f, -1.0f), vec3(0.0f, 1.0f, -1.0f), vec3(0.0f, 1.0f, 1.0f),
+            vec3(0.0f, -1.0f, 1.0f));
+    addQuad(scene, "lit", white, vec3(-1.5f * h, -1.0f, -1.0f), vec3(-1.5f * h, 1.0f, -1.0f),
+            vec3(-1.5f * h, 1.0f, 1.0f), vec3(-1.5f * h, -1.0f, 1.0f));
+    // A floor facing the walls from x = 0.5, so its points look at the dark wall.
+    addQuad(scene, "facing", white, vec3(0.5f, -1.0f, -1.0f), vec3(0.5f, -1.0f, 1.0f), vec3(0.5f, 1.0f, 1.0f),
+            vec3(0.5f, 1.0f, -1.0f));
+    REQUIRE(glm::dot(scene.meshes[0].normals[0], vec3(1.0f, 0.0f, 0.0f)) > 0.99f);
+    REQUIRE(glm::dot(scene.meshes[2].normals[0], vec3(-1.0f, 0.0f, 0.0f)) > 0.99f);
+    VoxelScene lit = voxels(scene, h);
+    lit.faceRadiance.assign(lit.size(), FaceRadiance{});
+    lit.radiance.assign(lit.size(), vec3(0.0f));
+    for (size_t i = 0; i < lit.size(); ++i)
+        if (lit.centre(i).x < -h) lit.faceRadiance[i][0] = vec3(1.0f);  // the lit wall's +X face
+    for (size_t i = 0; i < lit.size(); ++i) lit.radiance[i] = faceWeightedMean(lit.faceRadiance[i].data(), lit.axisWeights[i].data());
+    const RadianceMips mips = buildRadianceMips(lit, lit.radiance, lit.faceRadiance);
+    const IrradianceCache cache(lit, 2);
+    const Traced t = traced(scene);
+    const std::vector<vec3> E = gatherByRays(cache.points(), mips.view(), t.bvh.view(), t.scene.view(), 8);
+    int facingPoints = 0;
+    for (size_t q = 0; q < E.size(); ++q) {
+        if (!(cache.points()[q].normal.x < -0.9f)) continue;
+        ++facingPoints;
+        INFO("point " << q << " at x = " << cache.points()[q].position.x);
+        CHECK(E[q].x == 0.0f);
+    }
+    CHECK(facingPoints > 0);
+}
+
+TEST_CASE("The bake gathers by cones where rays see the backs of single-sided surfaces", "[bake]") {
+    // A floor under a shelf that faces up as the floor does: the floor's rays hit the shelf's
+    // underside, the back of a single-sided surface, which the voxels do not show (they hold a
+    // surface's front, and a double-sided surface's two sides).
+    for (bool doubleSided : {false, true}) {
+        Scene scene;
+        scene.sourcePath = "shelf (test)";
+        const int white = addLambert(scene, vec3(0.5f));
+        scene.materials[size_t(white)].doubleSided = doubleSided;
+        addQuad(scene, "floor", white, vec3(0.0f), vec3(0.0f, 0.0f, 1.0f), vec3(1.0f, 0.0f, 1.0f), vec3(1.0f, 0.0f, 0.0f));
+        addQuad(scene, "shelf", white, vec3(0.0f, 0.3f, 0.0f), vec3(0.0f, 0.3f, 1.0f), vec3(1.0f, 0.3f, 1.0f),
+                vec3(1.0f, 0.3f, 0.0f));
+        const VoxelScene v = voxels(scene, 1.0 / 31.0);
+        const Traced t = traced(scene);
+        const GatherVisibilityChoice choice =
+            chooseGatherVisibility(GatherVisibility::Auto, v, 3, t.bvh.view(), t.scene.view());
+        INFO((doubleSided ? "double-sided: " : "single-sided: ") << describeGatherVisibility(choice));
+        REQUIRE(choice.probe.hits > 0);
+        if (doubleSided) {
+            CHECK(choice.probe.singleSidedBacks == 0);
+            CHECK(choice.visibility == GatherVisibility::Rays);
+        } else {
+            // The floor's rays that hit anything hit the shelf's underside; the shelf's go up.
+            CHECK(choice.probe.share() > 0.9);
+            CHECK(choice.visibility == GatherVisibility::Cones);
+        }
+        CHECK_THAT(choice.setBy, Catch::Contains("probe rays hit the back of a single-sided surface"));
+        // A setting wins, and says so.
+        const GatherVisibilityChoice forced = chooseGatherVisibility(GatherVisibility::Rays, v, 3, t.bvh.view(), t.scene.view());
+        CHECK(forced.visibility == GatherVisibility::Rays);
+        CHECK(forced.setBy == "the gather-visibility setting");
+    }
+}
+
+TEST_CASE("Gather visibility and ray counts outside their ranges are refused by name", "[bake]") {
+    BakeSettings settings;
+    CHECK_THROWS_WITH(applySetting(bakeSettingsTable(), settings, "gather-visibility", "sideways"),
+                      Catch::Contains("gather-visibility") && Catch::Contains("auto, cones, rays"));
+    CHECK_THROWS_WITH(applySetting(bakeSettingsTable(), settings, "gather-rays", "0"), Catch::Contains("gather-rays"));
+    CHECK_THROWS_WITH(applySetting(bakeSettingsTable(), settings, "bounce-rays", "65"), Catch::Contains("bounce-rays"));
+    settings.bounceRays = 0;
+    CHECK_THROWS_WITH(validateBakeSettings(settings), Catch::Contains("bounce-rays"));
+    applySetting(bakeSettingsTable(), settings, "gather-visibility", "cones");
+    CHECK(settings.gatherVisibility == GatherVisibility::Cones);
+}
