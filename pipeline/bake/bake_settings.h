@@ -74,8 +74,9 @@ struct BakeSettings {
     // Rays or cones for the bounces' and the final gather's visibility (GatherVisibility), and
     // the rays per axis of each point's n × n fan when rays: 16 × 16 at the final gather, 8 × 8
     // at every bounce (bounce light is smooth, and every voxel interpolates several points).
-    // Lightmap / image relative RMSE on the Cycles Cornell boxes (quad; point), 63 voxels,
-    // 2026-11-24: cones 4.95% / 5.69%; 5.82% / 6.55%. Rays: see README "Rays for visibility".
+    // Lightmap / image relative RMSE on the Cycles Cornell boxes (quad; point) at 111 voxels,
+    // `voxlight bench`, 2026-11-24: rays 2.9% / 4.3%; 3.0% / 3.9%. Cones 5.9% / 6.3%; 5.8% /
+    // 6.4%. 8 × 8 rays at the final gather: 3.3% / 4.7%; 3.4% / 4.5%.
     GatherVisibility gatherVisibility = GatherVisibility::Auto;
     int gatherRays = 16;
     int bounceRays = 8;

@@ -1,34 +1,40 @@
 // The gather by rays: takes gather points (cone/irradiance_cache.h), the radiance mips, the
 // BVH and the traced scene; gives the irradiance at each point from n × n rays against the
-// scene's triangles, each reading the mips where it hits, filtered over the footprint that a
-// cone of the ray's share of the hemisphere has there. Cones find what they see by
-// compositing the mips' opacity; rays find it exactly and keep the mips' prefiltered radiance.
+// scene's triangles, each reading the light of the voxels where it hits. Cones find what they
+// see by compositing the mips' opacity; rays find it exactly, and the voxels still hold the
+// light (direct light and every earlier bounce).
 //
 // Why: a cone reads a coarse mip voxel as partly opaque wherever a wall lies within its
 // trilinear footprint, a whole voxel of that level to every side, so walls seen edge-on are a
 // fog, a block beside a cone's path dims it, and the coarse samples at a cone's far end reach
 // through a wall into the room behind it (README, "Where the Cornell boxes' indirect error
-// comes from"). Against the path tracer on zdm2, eight bounces of cones hold 1.25 times the
-// light of nine-bounce paths, eight bounces of rays 1.00 (/work notes: the bounce series
-// compared bounce by bounce). On the Cycles Cornell boxes the lightmaps' error falls from
-// 4.95% / 5.82% to about 4% / 3.8% at the same voxel size and time (README, accuracy).
+// comes from"). A ray finds the surface it sees exactly and reads only the voxels that surface
+// passes through. On the Cycles Cornell boxes at 111 voxels the lightmaps' error against
+// Cycles is 2.95% / 2.99% by rays and 5.9% / 5.8% by cones (quad / point), and the bright
+// sealed rooms of scenes/two_rooms.gltf leak 0.04% / 0% / 0% through walls 0.5 / 1 / 2 voxels
+// thick by rays, 0.10% / 0.18% / 0.41% by cones (`voxlight bench`, README "Rays for
+// visibility").
 //
 // A ray leaves the point's surface: from the point lifted off its surface (liftOffSurface), a
 // ray back along −n finds the surface within three voxels, and the rays start on it (offset
 // by offsetRayOrigin); where none is found they start at the lifted point. The n × n
 // directions are cosine-distributed and stratified, turned about the normal by the point's
-// frame (gatherFrame), so a point's rays turn with the scene. A ray that hits at distance t
-// reads the level whose voxel matches D = max(h, 2·t·tan ψ)/2 (as cones do, one level finer
-// than the footprint: cone_trace.h), ψ the half-angle of a cone of the ray's solid angle
-// π/(N·cos θ), at half a voxel of that level in front of the hit, each voxel seen from the
-// ray's origin (sampleMipLevel). A ray that leaves the scene reads nothing.
+// frame (gatherFrame), so a point's rays turn with the scene. Where a ray hits a surface of
+// normal n it reads, along each axis a (weight n_a²), the level-0 texel that shows the face
+// looking back at it (radiance_mips.h) in the voxel holding the hit or its neighbour along a,
+// whichever shows more surface. Only voxels the surface passes through are read: reading the
+// level that matches a cone of the ray's solid angle instead (trilinear around the hit) let
+// the far rays of the bright rooms read the lit room's floor across the wall (room B 0.29% /
+// 0.41% / 0.25% of room A at walls 0.5 / 1 / 2 voxels) for the same Cornell error. A ray that
+// leaves the scene reads nothing.
 //
 // The mips show a surface's front, and a double-sided surface's back; the back of a
 // single-sided one shows nothing. A path tracer (and Cycles) reflects light off both sides of
-// every surface, so in a scene whose rays see many such backs (zdm2: 38% of the final
-// gather's hits) rays lose light at every bounce where the blur of cones keeps some:
-// probeSingleSidedBacks measures it, and the bake gathers by cones there (bake_settings.h
-// gatherVisibility).
+// every surface, so in a scene whose rays see many such backs (zdm2: 38.5% of the probe's
+// hits) rays lose light at every bounce where the blur of cones keeps some (zdm2's image by
+// rays 41.2% against 24.2% by cones, `voxlight bench tools/bench/zdm2.json`):
+// probeSingleSidedBacks measures it, and the bake gathers by cones there
+// (gather_visibility.h).
 #pragma once
 
 #include "bake/gather_visibility.h"

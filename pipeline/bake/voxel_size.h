@@ -1,19 +1,19 @@
 // The voxel size a bake uses when the user gives neither `resolution` nor `voxel-size`:
 // chosen from what the scene holds, the coarsest that keeps each feature within the error the
-// bench measures at its best error-per-second point (README "A voxel size the scene needs").
+// accuracy issue asks of the bake (README "A voxel size the scene needs").
 //
 // Features, each measured by what it does to the bake as the voxels coarsen:
 //  * the scene's size: kSceneVoxels voxels along its longest side, measured in its own frame
 //    (the axes of its most common surface orientations) so a scene modelled at an angle to
-//    the world axes gets the voxels it would get unturned. The bench's error per
-//    second (error² × time, `voxlight bench` with its resolution points, 2026-11-24) is best
-//    there or within 7% of the best on both Cycles Cornell boxes and scenes/two_rooms.gltf
-//    (whose best is 47 voxels by 3% / 12%); on zdm2 it is flat from 63 to 127 voxels (within
-//    3%, the reference's noise taken out) while the error falls from 29% to 21%. Coarser, the
-//    error climbs: at 47 voxels the Cornell quad's lightmap error is 16% higher and zdm2's
-//    indirect light 44% too bright (the bounce series of a bright level over-amplifies on few
-//    voxels). Tried and not taken: 6 voxels along the median free path between surfaces
-//    (103 on zdm2: 28.0% image error against 31.3%, but 1.2× the error² × time).
+//    the world axes gets the voxels it would get unturned. 111: the coarsest count at which
+//    the Cycles quad box's lightmap meets issue 13's 3% against Cycles (95 voxels: 3.3%,
+//    111: 2.9%, in 0.74 s; `voxlight bench`, 2026-11-24, gathering by rays). By error² ×
+//    time 63 voxels is cheaper on both Cornell boxes (111 is 1.27–1.74× its figure) and the
+//    two rooms (1.14–1.61×); on zdm2, its reference's noise taken out, 111 is within 6% of
+//    the best. 63 was the rule while the gathers went by cones, whose error did not fall with
+//    finer voxels (quad 4.9% at 63, 5.9% at 111). Tried and not taken: 6 voxels along the
+//    median free path between surfaces (103 on zdm2: 28.0% image error against 31.3% at 63,
+//    by cones, but 1.2× the error² × time).
 //  * each point or spot light's clearance, its distance to the nearest surface: a light less
 //    than about half a voxel from a surface falls into that surface's voxel layer and loses
 //    most of the light it gives the bounces (a point light 0.32 voxel under a ceiling: −21% of
@@ -24,7 +24,7 @@
 //    than the size rule, so a light placed on a surface cannot make a bake of billions of
 //    voxels; either limit is a warning naming the light it leaves unresolved.
 // Measured not to need voxels, so they do not set the size: walls thinner than a voxel (the
-// dark one of two sealed rooms keeps 0.27–0.30% of the lit one's light for walls 1/16 to 1
+// dark one of two sealed rooms keeps at most 0.30% of the lit one's light, at a wall half a
 // voxel thick: each side of a wall gathers and reflects on its own) and emissive surfaces of
 // any size or distance from a surface (their light is integrated over their triangles
 // exactly: a 1 cm emitter kept its first bounce within the coarse grid's own bias down to 16
