@@ -61,10 +61,18 @@ vec3 windingNormal(const TraceSceneView& scene, uint32_t triangle) {
     return glm::cross(v[1] - v[0], v[2] - v[0]);
 }
 
-// Direction (i, j) of n × n, and its cosine to the normal.
-vec3 fanDirection(const RayFan& fan, int i, int j, int n, float& cosTheta) {
-    const vec3 d = sampleCosineHemisphere(vec2((float(i) + 0.5f) / float(n), (float(j) + 0.5f) / float(n)));
-    cosTheta = d.z;
+// The n × n cosine-distributed, stratified directions about +Z that every fan lays out in its
+// own frame (the same for every point: computed once per gather).
+std::vector<vec3> fanPattern(int n) {
+    std::vector<vec3> pattern;
+    pattern.reserve(size_t(n) * size_t(n));
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j)
+            pattern.push_back(sampleCosineHemisphere(vec2((float(i) + 0.5f) / float(n), (float(j) + 0.5f) / float(n))));
+    return pattern;
+}
+
+vec3 fanDirection(const RayFan& fan, const vec3& d) {
     return glm::normalize(d.x * fan.tangent + d.y * fan.bitangent + d.z * fan.normal);
 }
 
@@ -117,24 +125,22 @@ std::vector<vec3> gatherByRays(const std::vector<GatherPoint>& points, const Mip
     std::vector<vec3> irradiance(points.size(), vec3(0.0f));
     if (mips.levelCount <= 0) return irradiance;
     const float h = mips.voxelSize;
-    const int n = raysPerAxis;
-    const float rays = float(n * n);
+    const std::vector<vec3> pattern = fanPattern(raysPerAxis);
+    const float rays = float(pattern.size());
     const MipLevelView& level0 = mips.levels[0];
     tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
         IndexLeafCache leaves;
         for (size_t q = range.begin(); q != range.end(); ++q) {
             const RayFan fan = rayFan(points[q], h, bvh, scene);
             vec3 sum(0.0f);
-            for (int i = 0; i < n; ++i)
-                for (int j = 0; j < n; ++j) {
-                    float cosTheta;
-                    Ray ray;
-                    ray.origin = fan.origin;
-                    ray.direction = fanDirection(fan, i, j, n, cosTheta);
-                    Hit hit;
-                    if (!intersectClosest(bvh, ray, hit)) continue;
-                    sum += hitRadiance(level0, leaves, ray, hit, windingNormal(scene, hit.triangle), h);
-                }
+            for (const vec3& d : pattern) {
+                Ray ray;
+                ray.origin = fan.origin;
+                ray.direction = fanDirection(fan, d);
+                Hit hit;
+                if (!intersectClosest(bvh, ray, hit)) continue;
+                sum += hitRadiance(level0, leaves, ray, hit, windingNormal(scene, hit.triangle), h);
+            }
             irradiance[q] = sum * (kPi / rays);
         }
         if (progress) progress->advance(range.size());
@@ -145,25 +151,23 @@ std::vector<vec3> gatherByRays(const std::vector<GatherPoint>& points, const Mip
 BackProbe probeSingleSidedBacks(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
                                 const TraceSceneView& scene, int raysPerAxis) {
     checkRays(raysPerAxis);
-    const int n = raysPerAxis;
+    const std::vector<vec3> pattern = fanPattern(raysPerAxis);
     return tbb::parallel_reduce(
         tbb::blocked_range<size_t>(0, points.size(), 64), BackProbe(),
         [&](const tbb::blocked_range<size_t>& range, BackProbe probe) {
             for (size_t q = range.begin(); q != range.end(); ++q) {
                 const RayFan fan = rayFan(points[q], voxelSize, bvh, scene);
-                for (int i = 0; i < n; ++i)
-                    for (int j = 0; j < n; ++j) {
-                        float cosTheta;
-                        Ray ray;
-                        ray.origin = fan.origin;
-                        ray.direction = fanDirection(fan, i, j, n, cosTheta);
-                        Hit hit;
-                        if (!intersectClosest(bvh, ray, hit)) continue;
-                        ++probe.hits;
-                        if (glm::dot(ray.direction, windingNormal(scene, hit.triangle)) > 0.0f &&
-                            !scene.materials[scene.materialIds[hit.triangle]].doubleSided)
-                            ++probe.singleSidedBacks;
-                    }
+                for (const vec3& d : pattern) {
+                    Ray ray;
+                    ray.origin = fan.origin;
+                    ray.direction = fanDirection(fan, d);
+                    Hit hit;
+                    if (!intersectClosest(bvh, ray, hit)) continue;
+                    ++probe.hits;
+                    if (glm::dot(ray.direction, windingNormal(scene, hit.triangle)) > 0.0f &&
+                        !scene.materials[scene.materialIds[hit.triangle]].doubleSided)
+                        ++probe.singleSidedBacks;
+                }
             }
             return probe;
         },
