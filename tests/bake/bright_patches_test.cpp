@@ -81,6 +81,45 @@ TEST_CASE("Bright faces become patches that carry exactly their power, and leave
     CHECK(splitBrightPatches(voxels, settings).patches.empty());
 }
 
+TEST_CASE("A bright slanted surface's patch carries its true area along its own normal", "[bake]") {
+    // Voxels of a plane with normal n = (3, 4, 0)/5, each holding area a of it: its axis
+    // weights are the area's projections, a·0.6 on +X and a·0.8 on +Y (voxelize.cpp). A patch
+    // must send L·a per voxel along n, not L·(0.6 + 0.8)·a split over the axes: summing the
+    // faces over-counts a slanted surface by ‖n‖₁, and patches square to the axes light
+    // receivers the surface faces away from (a turned Cornell box: 4–8% too much indirect).
+    const vec3 n(0.6f, 0.8f, 0.0f);
+    const float a = 0.7f * float(kH * kH);
+    VoxelScene voxels;
+    voxels.voxelSize = kH;
+    for (int k = 0; k < 12; ++k)
+        for (int z = 0; z < 12; ++z) {
+            voxels.coords.push_back(ivec3(k, 3 - k, z));  // a staircase along the plane
+            voxels.albedo.push_back(vec3(0.5f));
+            voxels.normal.push_back(n);
+            voxels.axisWeights.push_back(AxisWeights{a * n.x / float(kH * kH), 0, a * n.y / float(kH * kH), 0, 0, 0});
+            voxels.opacity.push_back(1.0f);
+            voxels.solid.push_back(1);
+            voxels.surfaceOffset.push_back(vec3(0.0f));
+            const bool bright = k < 4 && z < 4;
+            FaceRadiance faces{};
+            faces[0] = faces[2] = vec3(bright ? 40.0f : 1.0f);
+            voxels.faceRadiance.push_back(faces);
+            voxels.radiance.push_back(faceWeightedMean(faces.data(), voxels.axisWeights.back().data()));
+        }
+    BrightPatchSettings settings;
+    settings.factor = 4.0f;
+    settings.cellVoxels = 4;
+    const BrightPatchSplit split = splitBrightPatches(voxels, settings);
+    REQUIRE(split.patches.size() == 1);
+    CHECK(split.faces == 2 * 16);
+    const BrightPatch& patch = split.patches[0];
+    CHECK(patch.area == Approx(16 * a));
+    CHECK(patch.radiance.x == Approx(40.0f));
+    CHECK(patch.normal.x == Approx(n.x));
+    CHECK(patch.normal.y == Approx(n.y));
+    CHECK(patch.normal.z == Approx(0.0f).margin(1e-6));
+}
+
 TEST_CASE("A bright patch gives a gather point L A cos cos / r^2 far off, pi L close, nothing behind a wall", "[bake]") {
     BrightPatch patch;
     patch.position = vec3(0.0f, 2.0f, 0.0f);
