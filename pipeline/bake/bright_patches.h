@@ -12,9 +12,11 @@
 // instead of 1.16, the floor of the point box 0.89 instead of 0.70.
 //
 // A face is bright when its radiance exceeds `factor` times the area-weighted mean of all
-// faces; bright faces are merged per cell of `cellVoxels`³ voxels and face direction into one
-// patch each (its power, area and power-weighted surface point); the `maxPatches` most
-// powerful patches are taken out of the mips, the others stay in them.
+// faces; bright faces are merged per cell of `cellVoxels`³ voxels and surface side (the
+// signed axis its normal is closest to: voxel_scene.h voxelSides) into one patch each (its
+// power, area, normal and power-weighted surface point; a side's area is |Σ w_f·d_f| of its
+// faces, along its normal); the `maxPatches` most powerful patches are taken out of the mips,
+// the others stay in them.
 #pragma once
 
 #include "cone/irradiance_cache.h"
@@ -27,8 +29,8 @@ namespace vl {
 
 struct BrightPatch {
     vec3 position{0.0f};  // local frame, metres: the power-weighted surface point of its faces
-    vec3 normal{0.0f};    // the face direction (unit axis)
-    float area = 0.0f;    // m²: Σ axis weight · h²
+    vec3 normal{0.0f};    // unit: the area-weighted normal of its sides
+    float area = 0.0f;    // m²: Σ over its voxel sides of |Σ_f w_f·d_f| · h²
     vec3 radiance{0.0f};  // power / area
 };
 

@@ -32,7 +32,7 @@
 // single-sided one shows nothing. A path tracer (and Cycles) reflects light off both sides of
 // every surface, so in a scene whose rays see many such backs (zdm2: 38.5% of the probe's
 // hits) rays lose light at every bounce where the blur of cones keeps some (zdm2's image by
-// rays 41.1% against 24.2% by cones, `voxlight bench tools/bench/zdm2.json`):
+// rays 42.0% against 24.6% by cones, `voxlight bench tools/bench/zdm2.json`):
 // probeSingleSidedBacks measures it, and the bake gathers by cones there
 // (gather_visibility.h).
 #pragma once

@@ -7,10 +7,10 @@
 //    (the axes of its most common surface orientations) so a scene modelled at an angle to
 //    the world axes gets the voxels it would get unturned. 111: the coarsest count at which
 //    the Cycles quad box's lightmap meets issue 13's 3% against Cycles (95 voxels: 3.3%,
-//    111: 2.9%, in 0.74 s; `voxlight bench`, 2026-11-24, gathering by rays). By error² ×
-//    time 63 voxels is cheaper on both Cornell boxes (111 is 1.27–1.74× its figure) and the
-//    two rooms (1.14–1.61×); on zdm2, its reference's noise taken out, 111 is within 6% of
-//    the best. 63 was the rule while the gathers went by cones, whose error did not fall with
+//    111: 2.8%, in 0.60 s; `voxlight bench`, 2026-11-24, gathering by rays). By error² ×
+//    time 63 voxels is cheaper on both Cornell boxes (111 is 1.16–1.70× its figure); on the
+//    two rooms 111 is 1.06 / 1.19× the best (lightmap / image), on zdm2 the best once its
+//    reference's noise is taken out. 63 was the rule while the gathers went by cones, whose error did not fall with
 //    finer voxels (quad 4.9% at 63, 5.9% at 111). Tried and not taken: 6 voxels along the
 //    median free path between surfaces (103 on zdm2: 28.0% image error against 31.3% at 63,
 //    by cones, but 1.2× the error² × time).
