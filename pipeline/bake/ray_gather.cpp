@@ -36,8 +36,10 @@ RayFan rayFan(const GatherPoint& point, float h, const BvhView& bvh, const Trace
     const vec3 across = glm::cross(point.normal, point.tangent);
     fan.tangent = std::cos(angle) * point.tangent + std::sin(angle) * across;
     fan.bitangent = glm::cross(point.normal, fan.tangent);
-    // The point's surface under it; where the point lies beyond the surface's edge (a cell that
-    // holds only the last column of a floor by a wall), under a point a voxel to one side.
+    // The point's surface under it; where none lies within three voxels under it (the point's
+    // voxels straddle the surface's edge), under a point a voxel to one side. The side tries
+    // matter only on turned scenes and little there: the worst of four random turns of the
+    // Cycles boxes 3.09% / 3.33% without them, 3.07% / 3.32% with.
     const vec3 lifted = liftOffSurface(point.position, point.normal, h);
     fan.origin = lifted;
     const vec3 shifts[] = {vec3(0.0f), point.tangent, -point.tangent, across, -across};
