@@ -176,9 +176,15 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
     const TraceScene traceScene = TraceScene::build(scene, triangles);
     const TraceSceneView sceneView = traceScene.view();
     const BvhView bvhView = bvh.view();
-    const bool gathers = settings.bounces > 0 || (settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images));
+    const bool gathers =
+        settings.bounces > 0 || (settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images));
     result.gatherVisibility = timed(result.stages, "visibility", [&] {
-        return gathers ? chooseGatherVisibility(settings.gatherVisibility, result.voxels, settings.bounceGatherLevel, bvhView, sceneView) : GatherVisibilityChoice{};
+        if (gathers)
+            return chooseGatherVisibility(settings.gatherVisibility, result.voxels, settings.bounceGatherLevel, bvhView,
+                                          sceneView);
+        GatherVisibilityChoice none;
+        none.setBy = "nothing gathers (no bounces and no final gather)";
+        return none;
     });
     if (!settings.quiet && gathers) std::fprintf(stderr, "%s\n", describeGatherVisibility(result.gatherVisibility).c_str());
     const bool byRays = result.gatherVisibility.visibility == GatherVisibility::Rays;
