@@ -415,6 +415,22 @@ private:
         return "node " + std::to_string(index) + quoted(model_.nodes[static_cast<size_t>(index)].name);
     }
 
+    // A rotation's matrix with the entries that lie within rounding of 0 or ±1 made exact. A
+    // quarter turn written as a quaternion of √½ components comes out of it with 2·10⁻¹⁶ where
+    // 0 belongs, which moved a wall lying on a voxel boundary into the voxel beside it: the
+    // Cornell box under a node turned a quarter about X baked 0.53% away from the untouched
+    // one in its indirect light, and 0.035% turned exactly in memory. Entries of any other
+    // rotation are farther than 10⁻¹² from 0 and ±1 (a turn of 10⁻⁶ rad has 10⁻⁶ there).
+    static glm::dmat4 exactQuarterTurns(glm::dmat4 m) {
+        for (int c = 0; c < 3; ++c)
+            for (int r = 0; r < 3; ++r) {
+                double& v = m[c][r];
+                if (std::fabs(v) < 1e-12) v = 0.0;
+                else if (std::fabs(std::fabs(v) - 1.0) < 1e-12) v = v > 0.0 ? 1.0 : -1.0;
+            }
+        return m;
+    }
+
     glm::dmat4 localTransform(int index) const {
         const tinygltf::Node& node = model_.nodes[static_cast<size_t>(index)];
         if (!node.matrix.empty()) {
@@ -432,7 +448,7 @@ private:
             const double length = glm::length(q);
             if (!(length > 0.0) || !std::isfinite(length))
                 fail(nodeName(index) + ": rotation is not a unit quaternion");
-            m = m * glm::mat4_cast(q / length);
+            m = m * exactQuarterTurns(glm::mat4_cast(q / length));
         }
         if (!node.scale.empty()) {
             if (node.scale.size() != 3) fail(nodeName(index) + ": scale does not have 3 elements");

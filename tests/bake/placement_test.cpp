@@ -6,11 +6,11 @@
 // anchorToVoxelGrid), so what remains is float rounding inside the local frame, cone sets
 // laid out in a frame of their own (irradiance_cache.h gatherFrame) and, for the turns, the
 // order in which the voxelizer meets the triangles. Bound: 0.5% relative RMSE of every
-// output against the untransformed bake, except the indirect part under a turn: 1%. A quarter
-// turn about X leaves it 0.73% apart (total 0.35%, image 0.21%): the turned box's vertices
-// are rounded differently, a few voxels on the blocks' edges then fall into another face
-// class, and 3 of its 1843 gather points move or split; interpolation spreads the change
-// over the texels around them. The path tracer's means within 4σ of its Monte Carlo error.
+// output against the untransformed bake, issue 18's goal. Measured (2026-11-24): at most
+// 0.035% (the indirect part, quarter turn about X). Before the loader made a quarter turn's
+// matrix exact (gltf_loader.cpp exactQuarterTurns), that turn left the indirect part 0.53%
+// apart: 2·10⁻¹⁶ where 0 belonged moved walls that lie on voxel boundaries into the voxels
+// beside them. The path tracer's means within 4σ of its Monte Carlo error.
 #include "bake/bake.h"
 #include "bake/bake_settings.h"
 #include "bake/receivers.h"
@@ -41,8 +41,6 @@ struct Placement {
     std::vector<double> translation;  // empty: none
     double scale = 1.0;
     std::vector<double> rotation;  // quaternion x, y, z, w; empty: none
-
-    double indirectBound() const { return rotation.empty() ? 0.005 : 0.01; }
 };
 
 const double kHalfRoot = std::sqrt(0.5);
@@ -149,7 +147,7 @@ TEST_CASE("The bake does not change with the scene's scale, position or quarter 
                             << "), image " << image.relativeRmse);
         CHECK(total.relativeRmse <= 0.005);
         CHECK(direct.relativeRmse <= 0.005);
-        CHECK(indirect.relativeRmse <= placement.indirectBound());
+        CHECK(indirect.relativeRmse <= 0.005);
         CHECK(image.relativeRmse <= 0.005);
     }
 }
