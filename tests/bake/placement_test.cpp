@@ -7,7 +7,7 @@
 // laid out in a frame of their own (irradiance_cache.h gatherFrame) and, for the turns, the
 // order in which the voxelizer meets the triangles. Bound: 0.5% relative RMSE of every
 // output against the untransformed bake, issue 18's goal. Measured (2026-11-24): at most
-// 0.035% (the indirect part, quarter turn about X). Before the loader made a quarter turn's
+// 0.025% (the indirect part, quarter turn about Y). Before the loader made a quarter turn's
 // matrix exact (gltf_loader.cpp exactQuarterTurns), that turn left the indirect part 0.53%
 // apart: 2·10⁻¹⁶ where 0 belonged moved walls that lie on voxel boundaries into the voxels
 // beside them. The path tracer's means within 4σ of its Monte Carlo error.
