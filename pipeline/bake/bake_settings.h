@@ -76,7 +76,7 @@ struct BakeSettings {
     // at every bounce (bounce light is smooth, and every voxel interpolates several points).
     // Lightmap / image relative RMSE on the Cycles Cornell boxes (quad; point) at 111 voxels,
     // `voxlight bench`, 2026-11-24: rays 2.9% / 4.3%; 3.0% / 3.9%. Cones 5.9% / 6.3%; 5.8% /
-    // 6.4%. 8 × 8 rays at the final gather: 3.3% / 4.7%; 3.4% / 4.5%.
+    // 6.4%. 8 × 8 rays at the final gather: 3.3% / 4.7%; 3.4% / 4.5% (run of dec5125).
     GatherVisibility gatherVisibility = GatherVisibility::Auto;
     int gatherRays = 16;
     int bounceRays = 8;

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <map>
 #include <tuple>
+#include <utility>
 
 namespace vl {
 
@@ -26,12 +27,6 @@ struct PatchSum {
     std::vector<std::pair<uint32_t, uint8_t>> faces;  // (voxel, face)
 };
 
-// The direction of face f (+X, −X, +Y, −Y, +Z, −Z).
-glm::dvec3 faceDirection(int f) {
-    glm::dvec3 d(0.0);
-    d[f >> 1] = (f & 1) ? -1.0 : 1.0;
-    return d;
-}
 
 }  // namespace
 
@@ -79,7 +74,7 @@ BrightPatchSplit splitBrightPatches(const VoxelScene& voxels, const BrightPatchS
                     const ivec3 c = voxels.coords[i];
                     s = &cells[std::make_tuple(cellOf(c.x), cellOf(c.y), cellOf(c.z), dominantAxisFace(sides.normal[side]))];
                 }
-                projected += double(w) * faceDirection(f);
+                projected += double(w) * glm::dvec3(faceDirection(f));
                 radiance += double(w) * glm::dvec3(L);
                 weight += w;
                 s->faces.emplace_back(uint32_t(i), uint8_t(f));
@@ -115,11 +110,7 @@ BrightPatchSplit splitBrightPatches(const VoxelScene& voxels, const BrightPatchS
         const PatchSum& s = *r.sum;
         BrightPatch patch;
         const double length = glm::length(s.normal);
-        if (length > 0.0) {
-            patch.normal = vec3(s.normal / length);
-        } else {
-            patch.normal[r.face >> 1] = (r.face & 1) ? -1.0f : 1.0f;
-        }
+        patch.normal = length > 0.0 ? vec3(s.normal / length) : faceDirection(r.face);
         patch.area = float(s.area);
         patch.radiance = vec3(s.power / s.area);
         patch.position = vec3(s.weightedPosition / s.weight);
@@ -135,12 +126,27 @@ BrightPatchSplit splitBrightPatches(const VoxelScene& voxels, const BrightPatchS
 void addBrightPatchIrradiance(const std::vector<GatherPoint>& points, const std::vector<BrightPatch>& patches,
                               const BvhView& bvh, float lift, float voxelSize, std::vector<vec3>& irradiance) {
     if (patches.empty()) return;
+    // Each patch as a square of its area across its normal: Lambert's polygon formula is exact
+    // for it at any distance, where L·A·cos·cos/r² overshoots near it. Its half edges u, v
+    // follow the two axes after the normal's main one, laid into its plane (exactly those axes
+    // for a patch square to an axis).
+    std::vector<std::pair<vec3, vec3>> halfEdges(patches.size());
+    for (size_t p = 0; p < patches.size(); ++p) {
+        const vec3& m = patches[p].normal;
+        const int axis = dominantAxisFace(m) >> 1;
+        const vec3 e1 = faceDirection(2 * ((axis + 1) % 3)), e2 = faceDirection(2 * ((axis + 2) % 3));
+        const vec3 uDir = glm::normalize(e1 - glm::dot(e1, m) * m);
+        const vec3 vDir = glm::normalize(e2 - glm::dot(e2, m) * m - glm::dot(e2, uDir) * uDir);
+        const float half = 0.5f * std::sqrt(patches[p].area);
+        halfEdges[p] = {uDir * half, vDir * half};
+    }
     tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
         for (size_t k = range.begin(); k != range.end(); ++k) {
             const GatherPoint& point = points[k];
             const vec3 origin = point.position + point.normal * lift;
             vec3 E(0.0f);
-            for (const BrightPatch& patch : patches) {
+            for (size_t p = 0; p < patches.size(); ++p) {
+                const BrightPatch& patch = patches[p];
                 const vec3 d = patch.position - origin;
                 const float r2 = glm::dot(d, d);
                 if (!(r2 > 0.0f)) continue;
@@ -153,18 +159,7 @@ void addBrightPatchIrradiance(const std::vector<GatherPoint>& points, const std:
                 ray.direction = w;
                 ray.tMax = r - voxelSize;
                 if (ray.tMax > 0.0f && intersectAny(bvh, ray)) continue;
-                // The patch as a square of its area across its normal: Lambert's polygon formula
-                // is exact for it at any distance, where L·A·cos·cos/r² overshoots near it. Its
-                // edges follow the two axes after the normal's main one, laid into its plane
-                // (exactly those axes for a patch square to an axis).
-                const vec3& m = patch.normal;
-                const int axis = std::abs(m.x) >= std::abs(m.y) && std::abs(m.x) >= std::abs(m.z) ? 0 : (std::abs(m.y) >= std::abs(m.z) ? 1 : 2);
-                vec3 e1(0.0f), e2(0.0f);
-                e1[(axis + 1) % 3] = 1.0f;
-                e2[(axis + 2) % 3] = 1.0f;
-                const vec3 uDir = glm::normalize(e1 - glm::dot(e1, m) * m);
-                const vec3 vDir = glm::normalize(e2 - glm::dot(e2, m) * m - glm::dot(e2, uDir) * uDir);
-                const vec3 u = uDir * (0.5f * std::sqrt(patch.area)), v = vDir * (0.5f * std::sqrt(patch.area));
+                const auto& [u, v] = halfEdges[p];
                 const vec3 first[3] = {d - u - v, d + u - v, d + u + v};
                 const vec3 second[3] = {d - u - v, d + u + v, d - u + v};
                 E += patch.radiance *

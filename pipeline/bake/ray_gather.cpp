@@ -57,12 +57,6 @@ RayFan rayFan(const GatherPoint& point, float h, const BvhView& bvh, const Trace
     return fan;
 }
 
-// The winding normal of a triangle, unnormalised (its direction is all the lookups need).
-vec3 windingNormal(const TraceSceneView& scene, uint32_t triangle) {
-    const vec3* v = scene.vertices + 3 * size_t(triangle);
-    return glm::cross(v[1] - v[0], v[2] - v[0]);
-}
-
 // The n × n cosine-distributed, stratified directions about +Z that every fan lays out in its
 // own frame (the same for every point: computed once per gather).
 std::vector<vec3> fanPattern(int n) {
@@ -74,8 +68,16 @@ std::vector<vec3> fanPattern(int n) {
     return pattern;
 }
 
-vec3 fanDirection(const RayFan& fan, const vec3& d) {
-    return glm::normalize(d.x * fan.tangent + d.y * fan.bitangent + d.z * fan.normal);
+// Traces the fan's rays in `pattern` and calls hit(ray, closest hit) for each that hits.
+template <typename OnHit>
+void traceFan(const RayFan& fan, const std::vector<vec3>& pattern, const BvhView& bvh, OnHit&& onHit) {
+    for (const vec3& d : pattern) {
+        Ray ray;
+        ray.origin = fan.origin;
+        ray.direction = glm::normalize(d.x * fan.tangent + d.y * fan.bitangent + d.z * fan.normal);
+        Hit hit;
+        if (intersectClosest(bvh, ray, hit)) onHit(ray, hit);
+    }
 }
 
 // The radiance the voxels show a ray where it hits a surface of geometric normal n: along each
@@ -88,8 +90,8 @@ vec3 fanDirection(const RayFan& fan, const vec3& d) {
 // unlit underside (a closed double-sided box turned 30–60° kept 59–77% of its bounce series
 // that way, 100–101% single-sided). Only the voxels the surface itself passes through are
 // read, so nothing behind the surface (a thin wall's other room) is.
-vec3 hitRadiance(const MipLevelView& level0, IndexLeafCache& leaves, const Ray& ray, const Hit& hit, const vec3& n, float h) {
-    const ivec3 centre(glm::floor(ray.at(hit.t) / h + vec3(0.5f)));
+vec3 hitRadiance(const MipLevelView& level0, IndexLeafCache& leaves, const Ray& ray, const Hit& hit, const vec3& n) {
+    const ivec3 centre(glm::floor(ray.at(hit.t) * level0.inverseVoxelSize + vec3(0.5f)));
     vec3 sum(0.0f);
     float weights = 0.0f;
     const float length2 = glm::dot(n, n);
@@ -135,14 +137,9 @@ std::vector<vec3> gatherByRays(const std::vector<GatherPoint>& points, const Mip
         for (size_t q = range.begin(); q != range.end(); ++q) {
             const RayFan fan = rayFan(points[q], h, bvh, scene);
             vec3 sum(0.0f);
-            for (const vec3& d : pattern) {
-                Ray ray;
-                ray.origin = fan.origin;
-                ray.direction = fanDirection(fan, d);
-                Hit hit;
-                if (!intersectClosest(bvh, ray, hit)) continue;
-                sum += hitRadiance(level0, leaves, ray, hit, windingNormal(scene, hit.triangle), h);
-            }
+            traceFan(fan, pattern, bvh, [&](const Ray& ray, const Hit& hit) {
+                sum += hitRadiance(level0, leaves, ray, hit, windingCross(scene, hit.triangle));
+            });
             irradiance[q] = sum * (kPi / rays);
         }
         if (progress) progress->advance(range.size());
@@ -158,18 +155,12 @@ BackProbe probeSingleSidedBacks(const std::vector<GatherPoint>& points, float vo
         tbb::blocked_range<size_t>(0, points.size(), 64), BackProbe(),
         [&](const tbb::blocked_range<size_t>& range, BackProbe probe) {
             for (size_t q = range.begin(); q != range.end(); ++q) {
-                const RayFan fan = rayFan(points[q], voxelSize, bvh, scene);
-                for (const vec3& d : pattern) {
-                    Ray ray;
-                    ray.origin = fan.origin;
-                    ray.direction = fanDirection(fan, d);
-                    Hit hit;
-                    if (!intersectClosest(bvh, ray, hit)) continue;
+                traceFan(rayFan(points[q], voxelSize, bvh, scene), pattern, bvh, [&](const Ray& ray, const Hit& hit) {
                     ++probe.hits;
-                    if (glm::dot(ray.direction, windingNormal(scene, hit.triangle)) > 0.0f &&
+                    if (glm::dot(ray.direction, windingCross(scene, hit.triangle)) > 0.0f &&
                         !scene.materials[scene.materialIds[hit.triangle]].doubleSided)
                         ++probe.singleSidedBacks;
-                }
+                });
             }
             return probe;
         },

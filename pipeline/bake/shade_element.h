@@ -96,8 +96,7 @@ VL_HOSTDEV inline int lookupCandidates(const TraceSceneView& scene, const BvhVie
                     ray.tMax = 1.01f * length;
                     Hit hit;
                     if (!intersectClosest(bvh, ray, hit) || hit.t < 0.99f * length) continue;
-                    const vec3* v = scene.vertices + 3 * size_t(hit.triangle);
-                    if (!(glm::dot(glm::cross(v[1] - v[0], v[2] - v[0]), ray.direction) < 0.0f)) continue;
+                    if (!(glm::dot(windingCross(scene, hit.triangle), ray.direction) < 0.0f)) continue;
                 }
                 // Insertion by distance keeps the nearest first and equal ones in loop order.
                 const float distance = glm::dot(candidate - lifted, candidate - lifted);

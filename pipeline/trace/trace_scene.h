@@ -116,9 +116,15 @@ struct SurfaceHit {
     uint32_t material;
 };
 
-VL_HOSTDEV inline float triangleArea(const TraceSceneView& s, uint32_t triangle) {
+// The cross product of a triangle's edges: its winding normal (counter-clockwise = front),
+// twice its area long.
+VL_HOSTDEV inline vec3 windingCross(const TraceSceneView& s, uint32_t triangle) {
     const vec3* v = s.vertices + 3 * static_cast<size_t>(triangle);
-    return 0.5f * glm::length(glm::cross(v[1] - v[0], v[2] - v[0]));
+    return glm::cross(v[1] - v[0], v[2] - v[0]);
+}
+
+VL_HOSTDEV inline float triangleArea(const TraceSceneView& s, uint32_t triangle) {
+    return 0.5f * glm::length(windingCross(s, triangle));
 }
 
 VL_HOSTDEV inline SurfaceHit surfaceAt(const TraceSceneView& s, uint32_t triangle, float b1, float b2) {

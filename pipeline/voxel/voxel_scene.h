@@ -76,6 +76,13 @@ struct VoxelSides {
     int sideOfFace[6] = {-1, -1, -1, -1, -1, -1};
 };
 
+// The unit direction of face f (+X, −X, +Y, −Y, +Z, −Z).
+VL_HOSTDEV inline vec3 faceDirection(int f) {
+    vec3 d(0.0f);
+    d[f >> 1] = (f & 1) ? -1.0f : 1.0f;
+    return d;
+}
+
 VL_HOSTDEV inline VoxelSides voxelSides(const vec3& n, const float* axisWeights) {
     VoxelSides sides;
     const float length = glm::length(n);
@@ -83,8 +90,7 @@ VL_HOSTDEV inline VoxelSides voxelSides(const vec3& n, const float* axisWeights)
     int front = -1, back = -1;
     for (int f = 0; f < 6; ++f) {
         if (!(axisWeights[f] > 0.0f) || !isFinite(axisWeights[f])) continue;
-        vec3 d(0.0f);
-        d[f >> 1] = (f & 1) ? -1.0f : 1.0f;
+        const vec3 d = faceDirection(f);
         const float facing = cancelled ? 0.0f : d[f >> 1] * n[f >> 1];
         int* shared = facing > 0.0f ? &front : (facing < 0.0f ? &back : nullptr);
         if (shared && *shared >= 0) {
