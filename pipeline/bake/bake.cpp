@@ -178,22 +178,26 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
     const BvhView bvhView = bvh.view();
     const bool gathers =
         settings.bounces > 0 || (settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images));
+    RadianceMips bounced;          // the bounces' own mips, relit with their result
+    IrradianceCache bouncePoints;  // and their gather points, probed here, linked over them
     result.gatherVisibility = timed(result.stages, "visibility", [&] {
-        if (gathers)
-            return chooseGatherVisibility(settings.gatherVisibility, result.voxels, settings.bounceGatherLevel, bvhView,
-                                          sceneView);
+        if (gathers) {
+            bouncePoints = IrradianceCache(result.voxels, settings.bounceGatherLevel);
+            return chooseGatherVisibility(settings.gatherVisibility, bouncePoints, bvhView, sceneView);
+        }
         GatherVisibilityChoice none;
         none.setBy = "nothing gathers (no bounces and no final gather)";
         return none;
     });
     if (!settings.quiet && gathers) std::fprintf(stderr, "%s\n", describeGatherVisibility(result.gatherVisibility).c_str());
     const bool byRays = result.gatherVisibility.visibility == GatherVisibility::Rays;
-    const PointGatherer bounceRays = [&](const std::vector<GatherPoint>& points, const MipView& mips) {
-        return gatherByRays(points, mips, bvhView, sceneView, settings.bounceRays);
+    FaceTransport bounceTransport;  // the bounces' rays, traced once
+    const TransportBuilder bounceRays = [&](const std::vector<GatherPoint>& points,
+                                            const MipView& mips) -> const FaceTransport& {
+        bounceTransport = rayTransport(points, mips, result.voxels.size(), bvhView, sceneView, settings.bounceRays);
+        return bounceTransport;
     };
 
-    RadianceMips bounced;          // the bounces' own mips, relit with their result
-    IrradianceCache bouncePoints;  // and their gather points, linked over them
     timed(result.stages, "bounces", [&] {
         Progress progress("bounces", uint64_t(settings.bounces) * result.voxels.size(), settings.quiet);
         propagateBounces(result.voxels, bounceConeSettings(settings), settings.bounces, settings.bounceGatherLevel,
@@ -211,10 +215,12 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
     IrradianceCache cache;
     if (settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images)) {
         timed(result.stages, "gather", [&] {
-            // The bright patches leave the mips while the cones gather, and come back after.
+            // The bright patches leave the light the gather reads (the rays read faces, the
+            // cones the mips), and come back after.
             const BrightPatchSplit split = splitBrightPatches(result.voxels, settings.brightPatches);
             result.brightPatches = split.patches.size();
-            if (!split.patches.empty()) result.mips.relight(result.voxels, split.restRadiance, split.restFaces);
+            const bool relight = !split.patches.empty() && !byRays;
+            if (relight) result.mips.relight(result.voxels, split.restRadiance, split.restFaces);
             if (reusePoints) {
                 cache = std::move(bouncePoints);
             } else {
@@ -222,8 +228,17 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
                 cache.link(mipView);
             }
             Progress progress("gather", cache.points().size(), settings.quiet);
-            if (byRays)
-                cache.setIrradiance(gatherByRays(cache.points(), mipView, bvhView, sceneView, settings.gatherRays, &progress));
+            const std::vector<FaceRadiance>& light = split.patches.empty() ? result.voxels.faceRadiance : split.restFaces;
+            // The bounces' rays, when they are the final gather's (the same points and as
+            // many rays), are not traced again: their transport maps the cache's points first.
+            if (byRays && reusePoints && settings.bounceRays == settings.gatherRays) {
+                std::vector<vec3> irradiance = applyTransport(bounceTransport, light);
+                irradiance.resize(cache.points().size());
+                cache.setIrradiance(std::move(irradiance));
+                progress.advance(cache.points().size());
+            } else if (byRays)
+                cache.setIrradiance(
+                    gatherByRays(cache.points(), mipView, light, bvhView, sceneView, settings.gatherRays, &progress));
             else if (onGpu)
                 cache.setIrradiance(
                     cuda::gatherIrradianceCuda(cache.points(), mipView, settings.cone, settings.gatherTurns));
@@ -235,8 +250,8 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
                 addBrightPatchIrradiance(cache.points(), split.patches, bvhView, settings.cone.startOffset * h, h,
                                          irradiance);
                 cache.setIrradiance(std::move(irradiance));
-                result.mips.relight(result.voxels, result.voxels.radiance, result.voxels.faceRadiance);
             }
+            if (relight) result.mips.relight(result.voxels, result.voxels.radiance, result.voxels.faceRadiance);
             return 0;
         });
         result.gatherPoints = cache.points().size();

@@ -7,11 +7,13 @@
 #include "voxel/vdb_file.h"
 
 #include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
 
 #include <cctype>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -34,20 +36,30 @@ std::string safeName(const std::string& name) {
     return out.empty() ? "unnamed" : out;
 }
 
+// The bake's files, written side by side once all are listed (EXR compression takes a
+// core per file; one after the other they were a seventh of the Cycles quad box's bake),
+// listed in the report in the order they were added.
 class StagedFiles {
 public:
     StagedFiles(const fs::path& dir, BakeReport& report) : dir_(dir), report_(report) {}
-    void exr(const Image& image, const std::string& file) { add(file, [&](const std::string& p) { writeExr(image, p); }); }
-    void png(const Image& image, const std::string& file) { add(file, [&](const std::string& p) { writePngSrgb(image, p); }); }
-    template <typename F>
-    void add(const std::string& file, F&& write) {
-        write((dir_ / file).string());
+    void exr(const Image& image, const std::string& file) { add(file, [&image](const std::string& p) { writeExr(image, p); }); }
+    void png(const Image& image, const std::string& file) {
+        add(file, [&image](const std::string& p) { writePngSrgb(image, p); });
+    }
+    void add(const std::string& file, std::function<void(const std::string&)> write) {
+        writes_.push_back({(dir_ / file).string(), std::move(write)});
         report_.files.push_back(file);
+    }
+    // Throws the first error any write throws (the caller removes the staging folder).
+    void writeAll() {
+        tbb::parallel_for(size_t(0), writes_.size(), [&](size_t k) { writes_[k].second(writes_[k].first); });
+        writes_.clear();
     }
 
 private:
     fs::path dir_;
     BakeReport& report_;
+    std::vector<std::pair<std::string, std::function<void(const std::string&)>>> writes_;
 };
 
 nlohmann::json reportJson(const BakeReport& report, const BakeSettings& settings) {
@@ -134,6 +146,7 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
         result.voxels.settings = describeBakeSettings(settings);
         files.add("grids.vdb", [&](const std::string& p) { writeVoxelFile(result.voxels, p, mipGridsForFile(result.mips)); });
     }
+    files.writeAll();
     report.stages.push_back({"write", std::chrono::duration<double>(std::chrono::steady_clock::now() - writeStart).count()});
     report.warnings.insert(report.warnings.end(), diagnostics.warnings().begin(), diagnostics.warnings().end());
     report.peakMemoryBytes = peakResidentBytes();

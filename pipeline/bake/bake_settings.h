@@ -72,14 +72,18 @@ struct BakeSettings {
     // A gather at every sample (gather level −1) keeps all the light in the cones.
     BrightPatchSettings brightPatches;
     // Rays or cones for the bounces' and the final gather's visibility (GatherVisibility), and
-    // the rays per axis of each point's n × n fan when rays: 16 × 16 at the final gather, 8 × 8
-    // at every bounce (bounce light is smooth, and every voxel interpolates several points).
-    // Lightmap / image relative RMSE on the Cycles Cornell boxes (quad; point) at 111 voxels,
-    // `voxlight bench`, 2026-11-24: rays 2.9% / 4.3%; 3.0% / 3.9%. Cones 5.9% / 6.3%; 5.8% /
-    // 6.4%. 8 × 8 rays at the final gather: 3.3% / 4.7%; 3.4% / 4.5% (run of dec5125).
+    // the rays per axis of each point's n × n fan when rays: 16 × 16 at every bounce and at
+    // the final gather. The bounces trace their rays once (bake/ray_gather.h rayTransport);
+    // when the final gather sends as many rays from the same points it applies the same
+    // transport, so the bounces' rays cost only their time, once. Lightmap / image relative
+    // RMSE on the Cycles Cornell boxes (quad; point) at 111 voxels, `voxlight bench`,
+    // 2026-11-24: rays 2.9% / 4.3%; 3.0% / 3.9%. Cones 5.9% / 6.3%; 5.8% / 6.4%. 8 × 8 rays at
+    // the final gather: 3.3% / 4.7%; 3.4% / 4.5% (run of dec5125). Bounces of 8 × 8 rays
+    // (before the transport) left the point box at 3.1% / 4.0% and the bright sealed rooms
+    // of scenes/two_rooms.gltf 2.6% too bright (16 × 16: 2.7% / 3.6%, +1.3%).
     GatherVisibility gatherVisibility = GatherVisibility::Auto;
     int gatherRays = 16;
-    int bounceRays = 8;
+    int bounceRays = 16;
     LightmapSettings lightmap;
     DirectLightSettings direct;
     int imageWidth = 256;

@@ -28,6 +28,15 @@
 // 0.41% / 0.25% of room A at walls 0.5 / 1 / 2 voxels) for the same Cornell error. A ray that
 // leaves the scene reads nothing.
 //
+// Which faces a point's rays read, and with what weight, depends on where surface is, not on
+// the light: the bounces trace each point's fan once into a FaceTransport (rayTransport) and
+// apply it to every bounce's light, and the final gather, when it sends as many rays from the
+// same points, applies it once more (bake.cpp). On the Cycles quad box that took the bounces
+// from 0.41 s (8 traces of 8 × 8 rays) to 0.16 s with 16 × 16 rays, which also left the point
+// box 2.7% from Cycles instead of 3.1% and the bright sealed rooms of scenes/two_rooms.gltf
+// 1.3% too bright instead of 2.6% (stage times in bake.json, errors from `voxlight bench`,
+// 2026-11-24).
+//
 // The mips show a surface's front, and a double-sided surface's back; the back of a
 // single-sided one shows nothing. A path tracer (and Cycles) reflects light off both sides of
 // every surface, so in a scene whose rays see many such backs (zdm2: 38.5% of the probe's
@@ -38,6 +47,7 @@
 #pragma once
 
 #include "bake/gather_visibility.h"
+#include "cone/bounces.h"
 #include "cone/irradiance_cache.h"
 #include "cone/radiance_mips.h"
 #include "trace/bvh.h"
@@ -51,10 +61,25 @@ namespace vl {
 class Progress;
 
 // E at every point (W/m²) from raysPerAxis² rays (1 … kMaxGatherRaysPerAxis, else
-// SettingsError). TBB-parallel over points; the same bytes at any thread count. `progress`
-// advances once per point.
-std::vector<vec3> gatherByRays(const std::vector<GatherPoint>& points, const MipView& mips, const BvhView& bvh,
-                               const TraceSceneView& scene, int raysPerAxis, Progress* progress = nullptr);
+// SettingsError). A ray finds the voxels and faces it reads in the level 0 of `mips` (its
+// index and the texels' coverage: where surface is, which does not change with the light)
+// and reads their light in `faces`, one per voxel of those mips (the voxels' faceRadiance, or
+// a part of it: the bake's final gather reads the light without its bright patches).
+// TBB-parallel over points; the same bytes at any thread count. `progress` advances once per
+// point.
+std::vector<vec3> gatherByRays(const std::vector<GatherPoint>& points, const MipView& mips,
+                               const std::vector<FaceRadiance>& faces, const BvhView& bvh, const TraceSceneView& scene,
+                               int raysPerAxis, Progress* progress = nullptr);
+
+// The same gather as a fixed map from the voxels' face light to the points' irradiance
+// (cone/bounces.h FaceTransport): which faces a point's rays read, and how much, does not
+// change while the light does, so the bounces trace once and apply the map at every bounce.
+// Applied to faces it gives gatherByRays with the same faces, up to the order of summing.
+// TBB-parallel over points; the same bytes at any thread count. `progress` advances once per
+// point. `voxelCount`: the voxels of `mips` (faceRadiance's size).
+FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView& mips, size_t voxelCount,
+                           const BvhView& bvh, const TraceSceneView& scene, int raysPerAxis,
+                           Progress* progress = nullptr);
 
 struct BackProbe {
     uint64_t hits = 0;              // rays that hit a triangle
@@ -73,9 +98,9 @@ struct GatherVisibilityChoice {
     BackProbe probe;    // hits == 0 when no probe ran
 };
 
-// `requested` when it is cones or rays; for auto, the probe from the gather points of
-// `voxels` at `gatherLevel`.
-GatherVisibilityChoice chooseGatherVisibility(GatherVisibility requested, const VoxelScene& voxels, int gatherLevel,
+// `requested` when it is cones or rays; for auto, the probe from `points` (the bounces'
+// gather points).
+GatherVisibilityChoice chooseGatherVisibility(GatherVisibility requested, const IrradianceCache& points,
                                               const BvhView& bvh, const TraceSceneView& scene);
 // One line for the progress output: "gather visibility: rays (…)".
 std::string describeGatherVisibility(const GatherVisibilityChoice& choice);

@@ -129,11 +129,43 @@ SideWeights sideWeights(const VoxelScene& voxels, const IrradianceCacheView& cac
     return out;
 }
 
+// The point where a side no gather point applies to gathers: the voxel's centre, its frame
+// from where the voxel lies, not its index, so that it turns with the scene (gatherFrame).
+GatherPoint selfPoint(const VoxelScene& voxels, const MipView& view, uint32_t sideSlot) {
+    const size_t i = sideSlot / 6;
+    const VoxelSides sides = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
+    GatherPoint point;
+    point.position = voxels.centre(i);
+    point.normal = sides.normal[sideSlot % 6];
+    gatherFrame(point.position, point.normal, view.centre(), view.voxelSize, point.tangent, point.turn);
+    return point;
+}
+
 }  // namespace
+
+std::vector<vec3> applyTransport(const FaceTransport& transport, const std::vector<FaceRadiance>& faces) {
+    const size_t slots = faces.size() * 6;
+    for (const FaceTransport::Entry& entry : transport.entries)
+        if (entry.slot >= slots)
+            throw Error("applyTransport: slot " + std::to_string(entry.slot) + " lies past " + std::to_string(slots) +
+                        " voxel faces");
+    std::vector<vec3> irradiance(transport.pointCount());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, irradiance.size(), 256), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t q = range.begin(); q != range.end(); ++q) {
+            vec3 sum(0.0f);
+            for (uint32_t k = transport.begin[q]; k < transport.begin[q + 1]; ++k) {
+                const FaceTransport::Entry& entry = transport.entries[k];
+                sum += entry.weight * faces[entry.slot / 6][entry.slot % 6];
+            }
+            irradiance[q] = sum;
+        }
+    });
+    return irradiance;
+}
 
 void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces, int gatherLevel,
                       BounceTail tail, Progress* progress, RadianceMips* resultMips, IrradianceCache* resultCache,
-                      const PointGatherer* gatherer) {
+                      const TransportBuilder* transportBuilder) {
     validateConeSettings(settings);
     if (bounces < 0 || bounces > kMaxBounces)
         throw SettingsError("bounces = " + std::to_string(bounces) + " is outside [0, " +
@@ -141,7 +173,9 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
     checkChannels(voxels);
     IrradianceCache::checkLevel(gatherLevel);
     if (bounces == 0 || voxels.size() == 0) return;
-    IrradianceCache cache(voxels, gatherLevel);
+    const bool given = resultCache && resultCache->level() == gatherLevel &&
+                       resultCache->voxelSize() == voxels.voxelSize && !resultCache->points().empty();
+    IrradianceCache cache = given ? std::move(*resultCache) : IrradianceCache(voxels, gatherLevel);
 
     const ConeSet& set = coneSet(settings.coneCount);
     const std::vector<FaceRadiance> lit = litFaces(voxels);
@@ -151,28 +185,36 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
     cache.link(mips.view());
     const SideWeights weights = sideWeights(voxels, cache.view(mips.view()));
     std::vector<vec3> selfIrradiance(weights.selfGathered.size());
+    // By transport, the cache's points and then the self-gathered sides' are one map.
+    const FaceTransport* transport = nullptr;
+    if (transportBuilder) {
+        std::vector<GatherPoint> points = cache.points();
+        for (uint32_t sideSlot : weights.selfGathered) points.push_back(selfPoint(voxels, mips.view(), sideSlot));
+        transport = &(*transportBuilder)(points, mips.view());
+        if (transport->pointCount() != points.size())
+            throw Error("propagateBounces(" + voxels.sourceScene + "): the transport maps " +
+                        std::to_string(transport->pointCount()) + " points, not " + std::to_string(points.size()));
+    }
     double added = 0.0, addedBefore = 0.0;  // light the last two bounces added
     std::vector<FaceRadiance> older;  // L two bounces before the last, for the tail's local ratios
     for (int b = 0; b < bounces; ++b) {
         if (tail == BounceTail::Geometric && b == bounces - 1 && b >= 1) older = next;
-        if (b > 0) mips.relight(voxels, isotropic(voxels, current), current);
-        const MipView view = mips.view();
-        if (gatherer)
-            cache.setIrradiance((*gatherer)(cache.points(), view));
-        else
+        if (transport) {
+            std::vector<vec3> irradiance = applyTransport(*transport, current);
+            std::copy(irradiance.begin() + std::ptrdiff_t(cache.points().size()), irradiance.end(), selfIrradiance.begin());
+            irradiance.resize(cache.points().size());
+            cache.setIrradiance(std::move(irradiance));
+        } else {
+            if (b > 0) mips.relight(voxels, isotropic(voxels, current), current);
+            const MipView view = mips.view();
             cache.gather(view, settings);
-        tbb::parallel_for(size_t(0), weights.selfGathered.size(), [&](size_t k) {
-            const size_t i = weights.selfGathered[k] / 6;
-            const int side = static_cast<int>(weights.selfGathered[k] % 6);
-            const VoxelSides sides = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
-            // The frame and turn come from where the voxel lies, not its index, so that they
-            // turn with the scene (gatherFrame).
-            vec3 tangent;
-            float turn;
-            gatherFrame(voxels.centre(i), sides.normal[side], view.centre(), view.voxelSize, tangent, turn);
-            selfIrradiance[k] = coneTraceIrradiance(view, voxels.centre(i), sides.normal[side], set, settings, nullptr,
-                                                    turn, &tangent);
-        });
+            tbb::parallel_for(size_t(0), weights.selfGathered.size(), [&](size_t k) {
+                const GatherPoint point = selfPoint(voxels, view, weights.selfGathered[k]);
+                selfIrradiance[k] = coneTraceIrradiance(view, point.position, point.normal, set, settings, nullptr,
+                                                        point.turn, &point.tangent);
+            });
+        }
+        const MipView view = mips.view();
         const IrradianceCacheView points = cache.view(view);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, voxels.size()), [&](const tbb::blocked_range<size_t>& range) {
             for (size_t i = range.begin(); i != range.end(); ++i) {

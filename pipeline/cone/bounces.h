@@ -4,8 +4,9 @@
 //
 // Iteration (Jacobi on the rendering equation, every light path counted once), per face:
 //   L_0 = faceRadiance as lit;  L_b = L_0 + albedo/π · E_side[L_{b−1}],
-// E_side[L] the cone-traced irradiance at the surface side the face belongs to, from the
-// directional mips of L. Adding to the previous bounce's radiance instead of L_0 would count
+// E_side[L] the irradiance at the surface side the face belongs to, cone-traced from the
+// directional mips of L, or a fixed map of L's faces (FaceTransport, below) that rays against
+// the triangles found once. Adding to the previous bounce's radiance instead of L_0 would count
 // the earlier bounces twice. In a closed box of albedo ρ and uniform L_0:
 // L_1 = (1 + ρ)·L_0, L_2 = (1 + ρ + ρ²)·L_0.
 //
@@ -70,13 +71,34 @@ enum class BounceTail {
 // result: the bounces' own mips relit, the same bytes as buildRadianceMips(voxels) afterwards
 // (RadianceMips::relight), without building the levels and index grids a second time.
 // `cache`, likewise, receives the bounces' gather points at gatherLevel, linked over those
-// mips (the topology a final gather at the same level builds and links again).
-// `gatherer`, when given, computes the irradiance at the gather points in place of their cones
-// (bake/ray_gather.h: rays against the triangles); sides no point applies to still gather
-// cones at the voxel.
-using PointGatherer = std::function<std::vector<vec3>(const std::vector<GatherPoint>& points, const MipView& mips)>;
+// mips (the topology a final gather at the same level builds and links again); when it
+// already holds points at gatherLevel (the caller's, of these voxels: the bake probes them
+// first, bake/gather_visibility.h), the bounces take them instead of building them again.
+// `transport`, when given, replaces the cones: it maps the gather points (the cache's, then
+// one per side no point applies to, at the voxel's centre) to a FaceTransport built once
+// (bake/ray_gather.h rayTransport: rays against the triangles), which it owns and keeps past
+// the call (the bake's final gather applies it again), and every bounce applies it to the
+// last bounce's faceRadiance; the mips are then only relit for `mips`.
+//
+// Irradiance at points as a fixed linear map of the voxels' face radiance: E[q] = Σ weight ·
+// faceRadiance[slot / 6][slot % 6] over q's entries. A gather whose visibility does not
+// change between bounces is found once and applied at each.
+struct FaceTransport {
+    struct Entry {
+        uint32_t slot;  // voxel · 6 + face
+        float weight;
+    };
+    std::vector<uint32_t> begin{0};  // point q: entries [begin[q], begin[q + 1])
+    std::vector<Entry> entries;
+    size_t pointCount() const { return begin.size() - 1; }
+};
+// E at every point of `transport` from `faces` (TBB-parallel; each point summed in entry
+// order: the same bytes at any thread count). Throws Error when a slot lies past `faces`.
+std::vector<vec3> applyTransport(const FaceTransport& transport, const std::vector<FaceRadiance>& faces);
+using TransportBuilder =
+    std::function<const FaceTransport&(const std::vector<GatherPoint>& points, const MipView& mips)>;
 void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces, int gatherLevel,
                       BounceTail tail, Progress* progress = nullptr, RadianceMips* mips = nullptr,
-                      IrradianceCache* cache = nullptr, const PointGatherer* gatherer = nullptr);
+                      IrradianceCache* cache = nullptr, const TransportBuilder* transport = nullptr);
 
 }  // namespace vl

@@ -5,6 +5,7 @@
 #include "voxel/vdb_detail.h"
 
 #include <openvdb/openvdb.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cctype>
@@ -12,6 +13,7 @@
 #include <fstream>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <set>
 #include <sstream>
@@ -350,53 +352,70 @@ void writeVoxelFile(const VoxelScene& voxels, const std::string& path, const std
     const auto transform = openvdb::math::Transform::createLinearTransform(voxels.voxelSize);
     transform->postTranslate(openvdb::Vec3d(voxels.origin.x, voxels.origin.y, voxels.origin.z));
     const auto& coords = voxels.coords;
-    openvdb::GridPtrVec grids;
-
-    grids.push_back(channelGrid<openvdb::Vec3SGrid>(grid_names::albedo, transform, coords,
-                                                    [&](size_t i) { return toVdb(voxels.albedo[i]); }));
-    auto normal = channelGrid<openvdb::Vec3SGrid>(grid_names::normal, transform, coords,
-                                                  [&](size_t i) { return toVdb(voxels.normal[i]); });
-    normal->setVectorType(openvdb::VEC_COVARIANT_NORMALIZE);
-    grids.push_back(normal);
+    // Each grid is built on its own task (an accessor fills one grid serially), in file order.
+    std::vector<std::function<openvdb::GridBase::Ptr()>> builders;
+    builders.push_back([&] {
+        return channelGrid<openvdb::Vec3SGrid>(grid_names::albedo, transform, coords,
+                                               [&](size_t i) { return toVdb(voxels.albedo[i]); });
+    });
+    builders.push_back([&] {
+        auto normal = channelGrid<openvdb::Vec3SGrid>(grid_names::normal, transform, coords,
+                                                      [&](size_t i) { return toVdb(voxels.normal[i]); });
+        normal->setVectorType(openvdb::VEC_COVARIANT_NORMALIZE);
+        return normal;
+    });
     if (!voxels.emission.empty())
-        grids.push_back(channelGrid<openvdb::Vec3SGrid>(grid_names::emission, transform, coords,
-                                                        [&](size_t i) { return toVdb(voxels.emission[i]); }));
-    auto opacity = channelGrid<openvdb::FloatGrid>(grid_names::opacity, transform, coords,
-                                                   [&](size_t i) { return voxels.opacity[i]; });
-    opacity->setGridClass(openvdb::GRID_FOG_VOLUME);
-    grids.push_back(opacity);
+        builders.push_back([&] {
+            return channelGrid<openvdb::Vec3SGrid>(grid_names::emission, transform, coords,
+                                                   [&](size_t i) { return toVdb(voxels.emission[i]); });
+        });
+    builders.push_back([&] {
+        auto opacity = channelGrid<openvdb::FloatGrid>(grid_names::opacity, transform, coords,
+                                                       [&](size_t i) { return voxels.opacity[i]; });
+        opacity->setGridClass(openvdb::GRID_FOG_VOLUME);
+        return opacity;
+    });
     if (!voxels.occlusion.empty())
-        grids.push_back(channelGrid<openvdb::FloatGrid>(grid_names::occlusion, transform, coords,
-                                                        [&](size_t i) { return voxels.occlusion[i]; }));
-    {
+        builders.push_back([&] {
+            return channelGrid<openvdb::FloatGrid>(grid_names::occlusion, transform, coords,
+                                                   [&](size_t i) { return voxels.occlusion[i]; });
+        });
+    builders.push_back([&] {
         auto solid = newGrid<openvdb::BoolGrid>(grid_names::solid, transform);
         auto accessor = solid->getAccessor();
         for (size_t i = 0; i < coords.size(); ++i)
             if (voxels.solid[i]) accessor.setValueOn(toCoord(coords[i]), true);
-        grids.push_back(solid);
-    }
+        return solid;
+    });
     if (!voxels.radiance.empty())
-        grids.push_back(channelGrid<openvdb::Vec3SGrid>(grid_names::radiance, transform, coords,
-                                                        [&](size_t i) { return toVdb(voxels.radiance[i]); }));
-    grids.push_back(channelGrid<openvdb::Vec3SGrid>(grid_names::axisWeightsPos, transform, coords, [&](size_t i) {
-        const AxisWeights& w = voxels.axisWeights[i];
-        return openvdb::Vec3f(w[0], w[2], w[4]);
-    }));
-    grids.push_back(channelGrid<openvdb::Vec3SGrid>(grid_names::axisWeightsNeg, transform, coords, [&](size_t i) {
-        const AxisWeights& w = voxels.axisWeights[i];
-        return openvdb::Vec3f(w[1], w[3], w[5]);
-    }));
-
-    for (const ExtraGrid& e : extra) {
-        const auto extraTransform = openvdb::math::Transform::createLinearTransform(e.voxelSize);
-        extraTransform->postTranslate(openvdb::Vec3d(e.translation.x, e.translation.y, e.translation.z));
-        if (e.isVector())
-            grids.push_back(channelGrid<openvdb::Vec3SGrid>(e.name, extraTransform, e.coords,
-                                                            [&](size_t i) { return toVdb(e.vectors[i]); }));
-        else
-            grids.push_back(channelGrid<openvdb::FloatGrid>(e.name, extraTransform, e.coords,
-                                                            [&](size_t i) { return e.scalars[i]; }));
-    }
+        builders.push_back([&] {
+            return channelGrid<openvdb::Vec3SGrid>(grid_names::radiance, transform, coords,
+                                                   [&](size_t i) { return toVdb(voxels.radiance[i]); });
+        });
+    builders.push_back([&] {
+        return channelGrid<openvdb::Vec3SGrid>(grid_names::axisWeightsPos, transform, coords, [&](size_t i) {
+            const AxisWeights& w = voxels.axisWeights[i];
+            return openvdb::Vec3f(w[0], w[2], w[4]);
+        });
+    });
+    builders.push_back([&] {
+        return channelGrid<openvdb::Vec3SGrid>(grid_names::axisWeightsNeg, transform, coords, [&](size_t i) {
+            const AxisWeights& w = voxels.axisWeights[i];
+            return openvdb::Vec3f(w[1], w[3], w[5]);
+        });
+    });
+    for (const ExtraGrid& e : extra)
+        builders.push_back([&e]() -> openvdb::GridBase::Ptr {
+            const auto extraTransform = openvdb::math::Transform::createLinearTransform(e.voxelSize);
+            extraTransform->postTranslate(openvdb::Vec3d(e.translation.x, e.translation.y, e.translation.z));
+            if (e.isVector())
+                return channelGrid<openvdb::Vec3SGrid>(e.name, extraTransform, e.coords,
+                                                       [&](size_t i) { return toVdb(e.vectors[i]); });
+            return channelGrid<openvdb::FloatGrid>(e.name, extraTransform, e.coords,
+                                                   [&](size_t i) { return e.scalars[i]; });
+        });
+    openvdb::GridPtrVec grids(builders.size());
+    tbb::parallel_for(size_t(0), builders.size(), [&](size_t k) { grids[k] = builders[k](); });
 
     openvdb::MetaMap meta;
     meta.insertMeta(kMetaVoxelSize, openvdb::DoubleMetadata(voxels.voxelSize));

@@ -2,6 +2,7 @@
 // chooses rays over cones.
 #include "bake/bake_settings.h"
 #include "bake/ray_gather.h"
+#include "cone/bounces.h"
 #include "core/error.h"
 #include "quad_scene.h"
 #include "trace/bvh.h"
@@ -9,6 +10,7 @@
 #include "voxel/voxelize.h"
 
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <glm/gtc/quaternion.hpp>
 
 using namespace vl;
@@ -36,6 +38,18 @@ VoxelScene voxels(const Scene& scene, double voxelSize) {
     return voxelize(scene, settings);
 }
 
+// A closed room of white walls (albedo rho) spanning [0, size], turned by `turn` so that its
+// walls cross the voxel axes at a slant.
+Scene turnedRoom(const vec3& size, const glm::quat& turn, float rho = 0.5f) {
+    Scene scene;
+    scene.sourcePath = "room (test)";
+    const int white = addLambert(scene, vec3(rho));
+    addRoom(scene, "room/", white, vec3(0.0f), size);
+    for (Mesh& mesh : scene.meshes)
+        for (vec3& p : mesh.positions) p = turn * p;
+    return scene;
+}
+
 }  // namespace
 
 TEST_CASE("Rays in a closed room whose every wall shows radiance L gather π·L at every point", "[bake]") {
@@ -45,14 +59,9 @@ TEST_CASE("Rays in a closed room whose every wall shows radiance L gather π·L 
     // black and pull its point under π·L. (Corner voxels of the turned room also have sides
     // facing out of it, from faces whose direction opposes the voxel's mean normal
     // (voxel_scene.h voxelSides); their points look at nothing and are left out here.)
-    Scene scene;
-    scene.sourcePath = "room (test)";
-    const int white = addLambert(scene, vec3(0.5f));
     const vec3 size(1.0f, 0.7f, 0.8f);
-    addRoom(scene, "room/", white, vec3(0.0f), size);
     const glm::quat turn = glm::angleAxis(0.4f, glm::normalize(vec3(1.0f, 2.0f, 0.5f)));
-    for (Mesh& mesh : scene.meshes)  // a turn, so walls cross the voxel axes at a slant
-        for (vec3& p : mesh.positions) p = turn * p;
+    const Scene scene = turnedRoom(size, turn);
     VoxelScene lit = voxels(scene, 1.0 / 29.0);
     const vec3 L(0.2f, 0.5f, 1.0f);
     lit.faceRadiance.assign(lit.size(), FaceRadiance{});
@@ -64,7 +73,7 @@ TEST_CASE("Rays in a closed room whose every wall shows radiance L gather π·L 
     const Traced t = traced(scene);
     REQUIRE(cache.points().size() > 20);
     for (int raysPerAxis : {4, 16}) {
-        const std::vector<vec3> E = gatherByRays(cache.points(), mips.view(), t.bvh.view(), t.scene.view(), raysPerAxis);
+        const std::vector<vec3> E = gatherByRays(cache.points(), mips.view(), lit.faceRadiance, t.bvh.view(), t.scene.view(), raysPerAxis);
         size_t inside = 0;
         for (size_t q = 0; q < E.size(); ++q) {
             const GatherPoint& point = cache.points()[q];
@@ -107,7 +116,7 @@ TEST_CASE("Rays read nothing behind the surface they hit", "[bake]") {
     const RadianceMips mips = buildRadianceMips(lit, lit.radiance, lit.faceRadiance);
     const IrradianceCache cache(lit, 2);
     const Traced t = traced(scene);
-    const std::vector<vec3> E = gatherByRays(cache.points(), mips.view(), t.bvh.view(), t.scene.view(), 8);
+    const std::vector<vec3> E = gatherByRays(cache.points(), mips.view(), lit.faceRadiance, t.bvh.view(), t.scene.view(), 8);
     int facingPoints = 0;
     for (size_t q = 0; q < E.size(); ++q) {
         if (!(cache.points()[q].normal.x < -0.9f)) continue;
@@ -133,7 +142,7 @@ TEST_CASE("The bake gathers by cones where rays see the backs of single-sided su
         const VoxelScene v = voxels(scene, 1.0 / 31.0);
         const Traced t = traced(scene);
         const GatherVisibilityChoice choice =
-            chooseGatherVisibility(GatherVisibility::Auto, v, 3, t.bvh.view(), t.scene.view());
+            chooseGatherVisibility(GatherVisibility::Auto, IrradianceCache(v, 3), t.bvh.view(), t.scene.view());
         INFO((doubleSided ? "double-sided: " : "single-sided: ") << describeGatherVisibility(choice));
         REQUIRE(choice.probe.hits > 0);
         if (doubleSided) {
@@ -146,7 +155,7 @@ TEST_CASE("The bake gathers by cones where rays see the backs of single-sided su
         }
         CHECK_THAT(choice.setBy, Catch::Contains("probe rays hit the back of a single-sided surface"));
         // A setting wins, and says so.
-        const GatherVisibilityChoice forced = chooseGatherVisibility(GatherVisibility::Rays, v, 3, t.bvh.view(), t.scene.view());
+        const GatherVisibilityChoice forced = chooseGatherVisibility(GatherVisibility::Rays, IrradianceCache(v, 3), t.bvh.view(), t.scene.view());
         CHECK(forced.visibility == GatherVisibility::Rays);
         CHECK(forced.setBy == "the gather-visibility setting");
     }
@@ -162,4 +171,90 @@ TEST_CASE("Gather visibility and ray counts outside their ranges are refused by 
     CHECK_THROWS_WITH(validateBakeSettings(settings), Catch::Contains("bounce-rays"));
     applySetting(bakeSettingsTable(), settings, "gather-visibility", "cones");
     CHECK(settings.gatherVisibility == GatherVisibility::Cones);
+}
+
+TEST_CASE("The bounces' ray transport is the gather by rays, traced once", "[bake]") {
+    // rayTransport records which faces a point's rays read and how much; applied to any light
+    // it must give what gatherByRays reads from that light directly (up to the order floats
+    // are summed in), and its weights at a point inside a closed room, where every ray reads
+    // a wall, must sum to π (E = π·L for light L on every face).
+    const vec3 size(1.0f, 0.7f, 0.8f);
+    const glm::quat turn = glm::angleAxis(0.7f, glm::normalize(vec3(-1.0f, 0.5f, 2.0f)));
+    const Scene scene = turnedRoom(size, turn);
+    VoxelScene lit = voxels(scene, 1.0 / 23.0);
+    // Light that differs from face to face and voxel to voxel.
+    lit.faceRadiance.assign(lit.size(), FaceRadiance{});
+    lit.radiance.assign(lit.size(), vec3(0.0f));
+    for (size_t i = 0; i < lit.size(); ++i) {
+        const vec3 c = lit.centre(i);
+        for (size_t f = 0; f < 6; ++f)
+            if (lit.axisWeights[i][f] > 0.0f)
+                lit.faceRadiance[i][f] = vec3(1.0f + std::sin(7.0f * c.x + float(f)), 1.0f + c.y, 0.5f + float(f) / 6.0f);
+        lit.radiance[i] = faceWeightedMean(lit.faceRadiance[i].data(), lit.axisWeights[i].data());
+    }
+    const RadianceMips mips = buildRadianceMips(lit, lit.radiance, lit.faceRadiance);
+    const IrradianceCache cache(lit, 2);
+    const Traced t = traced(scene);
+    const FaceTransport transport = rayTransport(cache.points(), mips.view(), lit.size(), t.bvh.view(), t.scene.view(), 8);
+    REQUIRE(transport.pointCount() == cache.points().size());
+    const std::vector<vec3> direct = gatherByRays(cache.points(), mips.view(), lit.faceRadiance, t.bvh.view(), t.scene.view(), 8);
+    const std::vector<vec3> mapped = applyTransport(transport, lit.faceRadiance);
+    size_t inside = 0;
+    for (size_t q = 0; q < direct.size(); ++q) {
+        INFO("point " << q);
+        for (int c = 0; c < 3; ++c) CHECK(mapped[q][c] == Approx(direct[q][c]).epsilon(1e-5).margin(1e-6));
+        const GatherPoint& point = cache.points()[q];
+        const vec3 local = glm::inverse(turn) * liftOffSurface(point.position, point.normal, float(lit.voxelSize));
+        if (glm::any(glm::lessThan(local, vec3(0.0f))) || glm::any(glm::greaterThan(local, size))) continue;
+        ++inside;
+        double sum = 0.0;
+        for (uint32_t k = transport.begin[q]; k < transport.begin[q + 1]; ++k) sum += transport.entries[k].weight;
+        CHECK(sum == Approx(kPi).epsilon(0.02));  // a ray in 64 may pass the seam where two walls meet
+    }
+    CHECK(inside > direct.size() / 2);
+    // One entry per face a point reads.
+    for (size_t q = 0; q < transport.pointCount(); ++q)
+        for (uint32_t k = transport.begin[q] + 1; k < transport.begin[q + 1]; ++k)
+            CHECK(transport.entries[k - 1].slot < transport.entries[k].slot);
+    // Light for fewer voxels than the transport reads is refused.
+    const std::vector<FaceRadiance> tooFew(lit.size() / 2);
+    CHECK_THROWS_WITH(applyTransport(transport, tooFew), Catch::Contains("lies past"));
+}
+
+TEST_CASE("Bounces by the ray transport in a closed white room follow the series L0·(1 + ρ + ρ²)", "[bake]") {
+    // Every ray from inside a closed room hits a wall, so with light L0 on every wall face the
+    // first gather is π·L0 and each bounce adds ρ times the last: two bounces give
+    // L0·(1 + ρ + ρ²) on every face that looks into the room, the faces of a wall voxel's
+    // outward sides (corners of the turned room: voxel_scene.h voxelSides) excepted. No face
+    // may exceed the series (a ray reads at most the L of a wall it hits).
+    const float rho = 0.5f;
+    const Scene scene =
+        turnedRoom(vec3(1.0f, 0.7f, 0.8f), glm::angleAxis(0.4f, glm::normalize(vec3(1.0f, 2.0f, 0.5f))), rho);
+    VoxelScene room = voxels(scene, 1.0 / 29.0);
+    const vec3 l0(1.0f, 0.8f, 0.6f);
+    room.faceRadiance.assign(room.size(), FaceRadiance{});
+    for (size_t i = 0; i < room.size(); ++i)
+        for (size_t f = 0; f < 6; ++f) room.faceRadiance[i][f] = room.axisWeights[i][f] > 0.0f ? l0 : vec3(0.0f);
+    room.radiance.assign(room.size(), l0);
+    const Traced t = traced(scene);
+    FaceTransport transport;
+    const TransportBuilder rays = [&](const std::vector<GatherPoint>& points, const MipView& mips) -> const FaceTransport& {
+        transport = rayTransport(points, mips, room.size(), t.bvh.view(), t.scene.view(), 8);
+        return transport;
+    };
+    propagateBounces(room, ConeSettings{}, 2, 2, BounceTail::None, nullptr, nullptr, nullptr, &rays);
+    REQUIRE(transport.pointCount() > 20);
+    const float series = 1.0f + rho + rho * rho;
+    size_t faces = 0, onSeries = 0;
+    for (size_t i = 0; i < room.size(); ++i)
+        for (size_t f = 0; f < 6; ++f) {
+            if (!(room.axisWeights[i][f] > 0.0f)) continue;
+            ++faces;
+            const vec3 ratio = room.faceRadiance[i][f] / l0;
+            INFO("voxel " << i << " face " << f << ": L / L0 = " << ratio.x << ", " << ratio.y << ", " << ratio.z);
+            for (int c = 0; c < 3; ++c) CHECK(ratio[c] <= series * 1.005f);
+            if (glm::abs(ratio.x - series) < 0.01f * series) ++onSeries;
+        }
+    INFO(onSeries << " of " << faces << " faces within 1% of the series");
+    CHECK(onSeries > faces * 9 / 10);
 }
