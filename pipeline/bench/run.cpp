@@ -183,11 +183,12 @@ std::vector<BenchPointSpec> benchSweep(bool full) {
     } else {
         each("resolution", {"64", "96", "160"});
         each("gather-visibility", {"cones"});
-        each("gather-rays", {"8"});
+        vct("rays=12", {{"bounce-rays", "12"}, {"gather-rays", "12"}});  // 12 x 12 rays at every gather
         each("gather-level", {"2"});
         each("bounces", {"2"});
     }
-    vct("resolution=48 gather-rays=8", {{"resolution", "48"}, {"gather-rays", "8"}});  // the fast end
+    // The fast end.
+    vct("resolution=48 rays=8", {{"resolution", "48"}, {"bounce-rays", "8"}, {"gather-rays", "8"}});
     const std::vector<int> spp = full ? std::vector<int>{4, 16, 64, 256, 1024} : std::vector<int>{16, 64, 256};
     for (int s : spp) points.push_back({"path", "spp=" + std::to_string(s), {}, s});
     return points;

@@ -180,7 +180,7 @@ TEST_CASE("Every point of the bench sweeps is a valid bake setting, labelled onc
         }
         CHECK(labels.count("vct default"));
         CHECK(labels.count("vct gather-visibility=cones"));
-        CHECK(labels.count("vct resolution=48 gather-rays=8"));
+        CHECK(labels.count("vct resolution=48 rays=8"));
         CHECK(labels.count("vct gather-level=-1") == (full ? 1u : 0u));
     }
 }
