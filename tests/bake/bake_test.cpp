@@ -653,3 +653,24 @@ TEST_CASE("A bake job writes each atlas group into its own lightmap at its resol
                                    Catch::Contains("cornell_box.gltf") && Catch::Contains("'Flor'"));
     CHECK_FALSE(fs::exists(out / "misnamed"));
 }
+
+TEST_CASE("Every bake setting's help states its real default", "[bake]") {
+    // The help ends with "(default X)": applying X to the defaults must change nothing a
+    // bake records (describeBakeSettings), or the help misleads (bounce-rays said 8 after the
+    // default became 16).
+    const BakeSettings defaults;
+    const std::string described = describeBakeSettings(defaults);
+    size_t checked = 0;
+    for (const SettingSpec<BakeSettings>& spec : bakeSettingsTable()) {
+        const size_t at = spec.help.rfind("(default ");
+        if (at == std::string::npos) continue;
+        const std::string value = spec.help.substr(at + 9, spec.help.size() - at - 10);
+        if (value.find(' ') != std::string::npos) continue;  // a default in words
+        INFO(spec.name << ": help says default '" << value << "'");
+        BakeSettings settings;
+        CHECK_NOTHROW(spec.apply(settings, value));
+        CHECK(describeBakeSettings(settings) == described);
+        ++checked;
+    }
+    CHECK(checked > 20);
+}
