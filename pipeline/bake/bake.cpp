@@ -266,7 +266,7 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
                 const ReceiverLighting lit = shade(atlas.receivers, sceneView, bvhView, mipView, gathered, true, progress);
                 progress.finish();
                 BakedLightmap baked{atlas.name, sumRgb(lit.direct, lit.indirect), lit.direct, lit.indirect, atlas.mask,
-                                    atlas.coveredTexels};
+                                    atlas.coveredTexels, atlas.meshes};
                 // Padding texels take their covered neighbours' values, so bilinear filtering
                 // at chart edges does not bleed black.
                 for (Image* image : {&baked.total, &baked.direct, &baked.indirect}) dilatePadding(*image, atlas.mask);

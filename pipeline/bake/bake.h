@@ -37,6 +37,7 @@ struct BakedLightmap {
     Image indirect;
     Image mask;        // 1 channel: 1 covered, 0 padding
     size_t coveredTexels = 0;
+    std::vector<uint32_t> meshes;  // indices into Scene::meshes baked into it
 };
 
 struct BakedImage {

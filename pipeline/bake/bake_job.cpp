@@ -3,6 +3,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "export/gltf_export.h"
 #include "scene/gltf_loader.h"
 #include "voxel/vdb_file.h"
 
@@ -62,6 +63,14 @@ private:
     std::vector<std::pair<std::string, std::function<void(const std::string&)>>> writes_;
 };
 
+// A scene read from a glTF file (not one made in code): what glTF out can write back.
+bool isGltfFile(const std::string& path) {
+    std::string extension = fs::path(path).extension().string();
+    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    std::error_code ec;
+    return (extension == ".gltf" || extension == ".glb") && fs::is_regular_file(path, ec);
+}
+
 nlohmann::json reportJson(const BakeReport& report, const BakeSettings& settings) {
     nlohmann::json json;
     json["scene"] = report.scenePath;
@@ -105,6 +114,10 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
 
     const auto loadStart = std::chrono::steady_clock::now();
     Scene scene = loadJobScene(job);
+    // What glTF out needs of the scene the bake consumes: its file and where each mesh came from.
+    const std::string sourcePath = scene.sourcePath;
+    std::vector<Mesh::Source> meshSources;
+    for (const Mesh& mesh : scene.meshes) meshSources.push_back(mesh.source);
     report.stages.push_back({"load", std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count()});
     report.triangles = scene.triangleCount();
     report.warnings = scene.warnings;
@@ -146,6 +159,13 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
         result.voxels.settings = describeBakeSettings(settings);
         files.add("grids.vdb", [&](const std::string& p) { writeVoxelFile(result.voxels, p, mipGridsForFile(result.mips)); });
     }
+    if (settings.outputs.gltf && isGltfFile(sourcePath))
+        files.add("scene.glb", [&](const std::string& p) {
+            std::vector<ExportedLightmap> lightmaps;
+            for (const BakedLightmap& lightmap : result.lightmaps)
+                lightmaps.push_back({lightmap.name, lightmap.meshes, encodeRgbm(lightmap.total)});
+            writeLightmappedGlb(sourcePath, meshSources, lightmaps, p, diagnostics);
+        });
     files.writeAll();
     report.stages.push_back({"write", std::chrono::duration<double>(std::chrono::steady_clock::now() - writeStart).count()});
     report.warnings.insert(report.warnings.end(), diagnostics.warnings().begin(), diagnostics.warnings().end());

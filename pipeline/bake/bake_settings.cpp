@@ -109,6 +109,8 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.outputs.images = parseBoolSetting("images", v); }},
         {"grids", "write grids.vdb (default true)",
          [](S& s, const std::string& v) { s.outputs.grids = parseBoolSetting("grids", v); }},
+        {"gltf", "write scene.glb, the scene with its lightmaps attached (MOZ_lightmap, RGBM PNG) (default true)",
+         [](S& s, const std::string& v) { s.outputs.gltf = parseBoolSetting("gltf", v); }},
         // Device
         {"device", "cpu, cuda or auto (the GPU when one is usable, else the CPU with a message) (default cpu)",
          [](S& s, const std::string& v) { s.device = cuda::parseDeviceChoice(v); }},

@@ -20,6 +20,7 @@ struct BakeOutputs {
     bool lightmaps = true;  // lightmap atlases (EXR total/direct/indirect, PNG preview)
     bool images = true;     // camera images (EXR + PNG + AOVs)
     bool grids = true;      // grids.vdb with every channel and the radiance mips
+    bool gltf = true;       // scene.glb: the input scene with its lightmaps (export/gltf_export.h)
 };
 
 struct BakeSettings {

@@ -90,7 +90,8 @@ std::string imageStemOf(const BakeReport& report) {
 void runVctPoint(const BenchOptions& options, const Comparer& comparer, BenchPointResult& p) {
     BakeJob job = options.base;
     for (const auto& [name, value] : p.spec.settings) applySetting(bakeSettingsTable(), job.settings, name, value);
-    job.settings.outputs.grids = false;
+    job.settings.outputs.grids = false;  // files that package the bake, not the bake
+    job.settings.outputs.gltf = false;
     job.settings.quiet = true;
     validateBakeSettings(job.settings);
     p.outputDir = "points/vct-" + fileSafe(p.spec.label);

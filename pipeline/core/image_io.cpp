@@ -3,6 +3,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -67,6 +68,38 @@ Image readImage(const std::string& path) {
     if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
         throw InputError("cannot read image " + path + ": " + in->geterror());
     return image;
+}
+
+std::vector<uint8_t> encodePng8(int width, int height, int channels, const std::vector<uint8_t>& texels) {
+    if (width <= 0 || height <= 0 || channels < 1 || channels > 4 ||
+        texels.size() != static_cast<size_t>(width) * static_cast<size_t>(height) * static_cast<size_t>(channels))
+        throw Error("encodePng8: " + std::to_string(texels.size()) + " bytes for " + std::to_string(width) + " x " +
+                    std::to_string(height) + " x " + std::to_string(channels));
+    std::vector<uint8_t> png;
+    OIIO::Filesystem::IOVecOutput memory(png);
+    OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
+    spec.attribute("oiio:UnassociatedAlpha", 1);
+    auto out = OIIO::ImageOutput::create("png");
+    if (!out) throw Error("encodePng8: no PNG writer: " + OIIO::geterror());
+    out->set_ioproxy(&memory);
+    if (!out->open("memory.png", spec) || !out->write_image(OIIO::TypeDesc::UINT8, texels.data()) || !out->close())
+        throw Error("encodePng8: " + out->geterror());
+    return png;
+}
+
+std::vector<uint8_t> readImage8(const std::string& path, int& width, int& height, int& channels) {
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    auto in = OIIO::ImageInput::open(path, &config);
+    if (!in) throw InputError("cannot read image " + path + ": " + OIIO::geterror());
+    const OIIO::ImageSpec& spec = in->spec();
+    width = spec.width;
+    height = spec.height;
+    channels = spec.nchannels;
+    std::vector<uint8_t> texels(static_cast<size_t>(width) * static_cast<size_t>(height) * static_cast<size_t>(channels));
+    if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, texels.data()))
+        throw InputError("cannot read image " + path + ": " + in->geterror());
+    return texels;
 }
 
 }  // namespace vl

@@ -4,6 +4,7 @@
 
 #include "core/image.h"
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -15,5 +16,12 @@ void writeExr(const Image& image, const std::string& path, const std::vector<std
 void writePngSrgb(const Image& image, const std::string& path);
 // Any format OpenImageIO reads, as float. 8-bit files are returned as stored (no decoding).
 Image readImage(const std::string& path);
+// An 8-bit PNG, in memory, of `texels` (`channels` per pixel, rows from the top) exactly as
+// given: no sRGB curve, alpha not associated (an encoding that keeps colour under a small
+// alpha, RGBM, needs both). Error when it cannot be encoded.
+std::vector<uint8_t> encodePng8(int width, int height, int channels, const std::vector<uint8_t>& texels);
+// The 8-bit texels of an image file as stored (alpha not associated, no curve applied);
+// InputError naming the path.
+std::vector<uint8_t> readImage8(const std::string& path, int& width, int& height, int& channels);
 
 }  // namespace vl

@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "scene/gltf_accessor.h"
 #include "scene/gltf_images.h"
+#include "scene/gltf_model.h"
 
 #include <tiny_gltf.h>
 
@@ -617,6 +618,7 @@ private:
             if (out.indices.empty()) continue;
             out.name = baseName + "/" + std::to_string(p);
             out.node = model_.nodes[static_cast<size_t>(nodeIndex)].name;
+            out.source = {meshIndex, static_cast<int>(p)};
             scene_.meshes.push_back(std::move(out));
         }
     }
@@ -809,14 +811,12 @@ bool startsWithGlbMagic(const std::string& path) {
 
 const std::vector<std::string>& supportedGltfExtensions() { return kSupportedExtensions; }
 
-Scene loadGltf(const std::string& path, const LoadOptions& options) {
+void readGltfModel(const std::string& path, tinygltf::Model& model, gltf::EncodedImages& encoded) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": no such file");
 
     precheckJson(path);
 
-    tinygltf::Model model;
-    gltf::EncodedImages encoded;
     std::string err, warn;
     bool ok = false;
     try {
@@ -833,6 +833,12 @@ Scene loadGltf(const std::string& path, const LoadOptions& options) {
             if (c == '\n') c = ';';
         throw InputError(path + ": cannot be parsed as glTF: " + (err.empty() ? std::string("unknown error") : err));
     }
+}
+
+Scene loadGltf(const std::string& path, const LoadOptions& options) {
+    tinygltf::Model model;
+    gltf::EncodedImages encoded;
+    readGltfModel(path, model, encoded);
 
     Scene scene;
     scene.sourcePath = path;

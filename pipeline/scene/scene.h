@@ -64,6 +64,12 @@ struct Material {
 struct Mesh {
     std::string name;          // "<mesh name>/<primitive index>" (node name when the mesh has none)
     std::string node;          // name of the glTF node that places it (what Blender calls the object)
+    // The glTF mesh and primitive it was read from (glTF out writes its lightmap to that
+    // primitive's material); −1 for a mesh made in code.
+    struct Source {
+        int mesh = -1;
+        int primitive = -1;
+    } source;
     int material = -1;         // index into Scene::materials; -1 = the glTF default material
     std::vector<vec3> positions;
     std::vector<vec3> normals;   // unit length, one per position (area-weighted when the file has none)

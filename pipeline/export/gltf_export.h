@@ -1,0 +1,39 @@
+// glTF out: takes the glTF file a bake read and the lightmaps it baked, gives one .glb a
+// glTF loader and a browser read as it is: the input scene node for node and material for
+// material, every buffer and image inside the file, and each lightmapped material pointing
+// at its lightmap through MOZ_lightmap (the material extension Mozilla Hubs and its editors
+// read: `index` the texture, `texCoord` 1, `intensity` the RGBM range; lightmap_encoding.h).
+// The nodes are the file's own, so the scene sits where it sat (the bake's local frame is
+// not written).
+//
+// A material whose primitives all lie in one lightmap carries it in place; a material shared
+// by primitives of several lightmaps, or by lightmapped and unlit primitives, is copied once
+// per lightmap ("name (lightmap NAME)") and those primitives point at their copy. A glTF
+// mesh placed by several nodes shares one material per primitive: its instances must share
+// one lightmap, and a warning names a primitive whose instances do not.
+#pragma once
+
+#include "core/diagnostics.h"
+#include "export/lightmap_encoding.h"
+#include "scene/scene.h"
+
+#include <string>
+#include <vector>
+
+namespace vl {
+
+struct ExportedLightmap {
+    std::string name;              // the atlas ("lightmap", a group's name): the image's name
+    std::vector<uint32_t> meshes;  // indices into Scene::meshes baked into it
+    RgbmImage encoded;
+};
+
+// Writes `path` (atomically) from the glTF file `source` re-read; `meshes` are the scene's
+// meshes as loaded from it (Scene::meshes' sources, by the indices the lightmaps use).
+// InputError naming the file when the source no longer reads; Error naming `path` when it
+// cannot be written.
+void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Source>& meshes,
+                         const std::vector<ExportedLightmap>& lightmaps, const std::string& path,
+                         Diagnostics& diagnostics);
+
+}  // namespace vl

@@ -1,0 +1,68 @@
+// Every scene.glb a bake writes passes the Khronos glTF validator (tools/gltf-validator,
+// installed by tools/install-deps.sh): a Blender export (the Cycles Cornell box), a .glb
+// level with its own textures (zdm2, its lights from the bench's job file) and a .gltf whose
+// geometry and texture lie in files beside it (Khronos' BoxTextured).
+#include "bake/bake_job.h"
+#include "bake/job_file.h"
+#include "support/paths.h"
+
+#include <catch2/catch.hpp>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+using namespace vl;
+using namespace vl::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+// The validator's exit status and what it printed.
+int validate(const std::string& glb, std::string& output) {
+    const std::string command = "node '" + sourceDir() + "/tools/gltf-validator/validate.js' '" + glb + "' 2>&1";
+    std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
+    if (!pipe) return -1;
+    std::array<char, 4096> buffer;
+    while (std::fgets(buffer.data(), int(buffer.size()), pipe.get())) output += buffer.data();
+    const int status = pclose(pipe.release());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+}  // namespace
+
+TEST_CASE("Every scene.glb the bake writes passes the Khronos glTF validator with no errors", "[bake]") {
+    VL_SKIP_WITHOUT_SHARED();
+    if (std::system("node --version >/dev/null 2>&1") != 0 ||
+        !fs::exists(sourceDir() + "/tools/gltf-validator/node_modules/gltf-validator/package.json"))
+        VL_SKIP("node or the glTF validator is not installed (tools/install-deps.sh installs both)");
+    BakeSettings settings;
+    settings.quiet = true;
+    settings.voxel.resolution = 32;
+    settings.outputs.images = false;
+    settings.outputs.grids = false;
+    std::vector<BakeJob> jobs = readJobFile(sourceDir() + "/tools/bench/zdm2.json", settings, tempDir("glb-validator"));
+    REQUIRE(jobs.size() == 1);
+    for (const std::string& scene : std::vector<std::string>{sharedDir() + "/reference/cornell_quad.gltf",
+                                    sharedDir() + "/scenes/khronos-sample-assets/Models/BoxTextured/glTF/BoxTextured.gltf"}) {
+        BakeJob job;
+        job.scenePath = scene;
+        job.settings = settings;
+        jobs.push_back(job);
+    }
+    for (size_t j = 0; j < jobs.size(); ++j) {
+        jobs[j].outputDir = (fs::path(tempDir("glb-validator")) / ("scene" + std::to_string(j))).string();
+        fs::remove_all(jobs[j].outputDir);
+        const BakeReport report = runBake(jobs[j]);
+        INFO(jobs[j].scenePath << ": " << report.error);
+        REQUIRE(report.ok);
+        const std::string glb = jobs[j].outputDir + "/scene.glb";
+        REQUIRE(fs::exists(glb));
+        std::string output;
+        const int status = validate(glb, output);
+        INFO(output);
+        CHECK(status == 0);
+        CHECK_THAT(output, Catch::Contains(": 0 errors"));
+    }
+}

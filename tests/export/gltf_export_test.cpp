@@ -1,0 +1,121 @@
+// glTF out (export/gltf_export.h): the scene written back whole, its lightmaps attached.
+#include "export/gltf_export.h"
+#include "scene/gltf_loader.h"
+#include "scene/gltf_model.h"
+#include "support/paths.h"
+
+#include <catch2/catch.hpp>
+
+using namespace vl;
+
+namespace {
+
+ExportedLightmap grey(const std::string& name, std::vector<uint32_t> meshes, float value) {
+    Image image(8, 8, 3, value);
+    return {name, std::move(meshes), encodeRgbm(image)};
+}
+
+tinygltf::Model reread(const std::string& path) {
+    tinygltf::Model model;
+    gltf::EncodedImages encoded;
+    readGltfModel(path, model, encoded);
+    return model;
+}
+
+const tinygltf::Value* lightmapOf(const tinygltf::Material& material) {
+    const auto it = material.extensions.find("MOZ_lightmap");
+    return it == material.extensions.end() ? nullptr : &it->second;
+}
+
+}  // namespace
+
+TEST_CASE("glTF out holds the scene's buffers and images in one .glb and points each material at its lightmap",
+          "[export]") {
+    // BoxTextured keeps its texture in a file beside it and its geometry in a .bin: the .glb
+    // must carry both, and the box's one material must carry MOZ_lightmap.
+    VL_SKIP_WITHOUT_SHARED();
+    const std::string source = test::sharedDir() + "/scenes/khronos-sample-assets/Models/BoxTextured/glTF/BoxTextured.gltf";
+    const Scene scene = loadGltf(source);
+    REQUIRE(scene.meshes.size() == 1);
+    const tinygltf::Model before = reread(source);
+    std::vector<Mesh::Source> sources{scene.meshes[0].source};
+    CHECK(sources[0].mesh == 0);
+    CHECK(sources[0].primitive == 0);
+    const std::string out = test::tempDir("gltf-out") + "/box.glb";
+    Diagnostics diagnostics(false, false);
+    writeLightmappedGlb(source, sources, {grey("lightmap", {0}, 3.0f)}, out, diagnostics);
+    CHECK(diagnostics.warnings().empty());
+
+    const tinygltf::Model after = reread(out);
+    CHECK(after.nodes.size() == before.nodes.size());
+    CHECK(after.meshes.size() == before.meshes.size());
+    CHECK(after.materials.size() == before.materials.size());  // in place: one material, one lightmap
+    REQUIRE(after.buffers.size() == 1);
+    CHECK(after.buffers[0].uri.empty());
+    for (const tinygltf::Image& image : after.images) {
+        CHECK(image.uri.empty());
+        CHECK(image.bufferView >= 0);
+    }
+    CHECK(std::count(after.extensionsUsed.begin(), after.extensionsUsed.end(), "MOZ_lightmap") == 1);
+    const tinygltf::Value* lightmap = lightmapOf(after.materials[0]);
+    REQUIRE(lightmap);
+    CHECK(lightmap->Get("texCoord").GetNumberAsInt() == 1);
+    CHECK(lightmap->Get("intensity").GetNumberAsDouble() == 4.0);  // the RGBM range above 3
+    const int texture = lightmap->Get("index").GetNumberAsInt();
+    REQUIRE(texture >= 0);
+    REQUIRE(static_cast<size_t>(texture) < after.textures.size());
+    CHECK(after.images[size_t(after.textures[size_t(texture)].source)].name == "lightmap");
+    CHECK(after.images[size_t(after.textures[size_t(texture)].source)].mimeType == "image/png");
+    // The loader reads it back: the same triangles, the box's own texture still decodes.
+    const Scene back = loadGltf(out);
+    REQUIRE(back.meshes.size() == 1);
+    CHECK(back.meshes[0].indices == scene.meshes[0].indices);
+    CHECK(back.meshes[0].positions == scene.meshes[0].positions);
+    CHECK(back.warnings == scene.warnings);
+}
+
+TEST_CASE("glTF out copies a material that serves several lightmaps or unlit primitives", "[export]") {
+    // The Cycles quad box's meshes share materials (the white walls, the blocks): baked into
+    // two lightmaps, a material used in both must become one copy per lightmap, and one also
+    // used by an unbaked primitive keeps the original for it.
+    VL_SKIP_WITHOUT_SHARED();
+    const std::string source = test::sharedDir() + "/reference/cornell_quad.gltf";
+    const Scene scene = loadGltf(source);
+    REQUIRE(scene.meshes.size() >= 4);
+    std::vector<Mesh::Source> sources;
+    for (const Mesh& mesh : scene.meshes) sources.push_back(mesh.source);
+    const tinygltf::Model before = reread(source);
+    // Meshes by material: the first material used by two meshes.
+    int shared = -1;
+    std::vector<uint32_t> users;
+    for (size_t m = 0; m < scene.meshes.size() && shared < 0; ++m) {
+        users.clear();
+        for (size_t k = 0; k < scene.meshes.size(); ++k)
+            if (scene.meshes[k].material == scene.meshes[m].material) users.push_back(uint32_t(k));
+        if (users.size() >= 2) shared = scene.meshes[m].material;
+    }
+    REQUIRE(shared >= 0);
+    const std::string out = test::tempDir("gltf-out") + "/quad.glb";
+    Diagnostics diagnostics(false, false);
+    // users[0] in lightmap A, users[1] in lightmap B, any further users unbaked.
+    writeLightmappedGlb(source, sources, {grey("A", {users[0]}, 0.5f), grey("B", {users[1]}, 0.5f)}, out, diagnostics);
+    const tinygltf::Model after = reread(out);
+    const auto materialOf = [&](uint32_t sceneMesh) {
+        const Mesh::Source& s = scene.meshes[sceneMesh].source;
+        return after.meshes[size_t(s.mesh)].primitives[size_t(s.primitive)].material;
+    };
+    const int a = materialOf(users[0]), b = materialOf(users[1]);
+    CHECK(a != b);
+    CHECK(a != shared);
+    CHECK(b != shared);
+    CHECK(after.materials.size() == before.materials.size() + 2);
+    REQUIRE(lightmapOf(after.materials[size_t(a)]));
+    REQUIRE(lightmapOf(after.materials[size_t(b)]));
+    CHECK(lightmapOf(after.materials[size_t(a)])->Get("index").GetNumberAsInt() !=
+          lightmapOf(after.materials[size_t(b)])->Get("index").GetNumberAsInt());
+    CHECK(after.materials[size_t(a)].name == before.materials[size_t(shared)].name + " (lightmap A)");
+    CHECK(after.materials[size_t(a)].pbrMetallicRoughness.baseColorFactor ==
+          before.materials[size_t(shared)].pbrMetallicRoughness.baseColorFactor);
+    CHECK_FALSE(lightmapOf(after.materials[size_t(shared)]));
+    for (size_t k = 2; k < users.size(); ++k) CHECK(materialOf(users[k]) == shared);
+}
