@@ -6,7 +6,7 @@ packages=(build-essential cmake ninja-build
   libglm-dev libtbb-dev catch2 libcli11-dev nlohmann-json3-dev
   python3-openvdb libbenchmark-dev libembree-dev
   gnuplot-nox  # voxlight bench draws its plot with gnuplot; the optional Cycles peer needs blender
-  nodejs npm)  # the Khronos glTF validator checks every scene.glb in the tests
+  nodejs)  # runs the Khronos glTF validator (tools/gltf-validator) on every scene.glb in the tests
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -17,10 +17,4 @@ if [ ${#missing[@]} -gt 0 ]; then
   [ "$(id -u)" -eq 0 ] || sudo_cmd="sudo"
   $sudo_cmd apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq --no-install-recommends "${missing[@]}"
-fi
-# The glTF validator, at the version package-lock.json pins, beside its script.
-validator="$(dirname "$0")/gltf-validator"
-if [ ! -f "$validator/node_modules/gltf-validator/package.json" ]; then
-  echo "installing the glTF validator (npm) into $validator" >&2
-  npm ci --prefix "$validator" --no-audit --no-fund --loglevel=error
 fi

@@ -1,5 +1,5 @@
-// Every scene.glb a bake writes passes the Khronos glTF validator (tools/gltf-validator,
-// installed by tools/install-deps.sh): a Blender export (the Cycles Cornell box), a .glb
+// Every scene.glb a bake writes passes the Khronos glTF validator (tools/gltf-validator, the
+// validator's npm package kept in the repository; node from tools/install-deps.sh): a Blender export (the Cycles Cornell box), a .glb
 // level with its own textures (zdm2, its lights from the bench's job file) and a .gltf whose
 // geometry and texture lie in files beside it (Khronos' BoxTextured).
 #include "bake/bake_job.h"
@@ -34,9 +34,8 @@ int validate(const std::string& glb, std::string& output) {
 
 TEST_CASE("Every scene.glb the bake writes passes the Khronos glTF validator with no errors", "[bake]") {
     VL_SKIP_WITHOUT_SHARED();
-    if (std::system("node --version >/dev/null 2>&1") != 0 ||
-        !fs::exists(sourceDir() + "/tools/gltf-validator/node_modules/gltf-validator/package.json"))
-        VL_SKIP("node or the glTF validator is not installed (tools/install-deps.sh installs both)");
+    if (std::system("node --version >/dev/null 2>&1") != 0)
+        VL_SKIP("node is not installed (tools/install-deps.sh installs Debian's nodejs)");
     BakeSettings settings;
     settings.quiet = true;
     settings.voxel.resolution = 32;
