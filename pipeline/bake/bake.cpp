@@ -132,6 +132,25 @@ double totalSeconds(const std::vector<StageTime>& stages) {
     return seconds;
 }
 
+// A scene none of whose meshes has TEXCOORD_1, baked into the one shared atlas: generated UVs
+// give it a lightmap. Where some meshes have their own layout (a Blender lightmap pack), or
+// atlas groups or one image per mesh are asked for, generated charts would share images with
+// those layouts: not yet; those meshes stay out of the lightmap with a warning, as before.
+BakeSettings settingsWithLightmap(BakeSettings settings, const LightmapSettings& lightmap) {
+    settings.lightmap = lightmap;
+    return settings;
+}
+
+bool needsLightmapUvs(const Scene& scene, const LightmapSettings& settings) {
+    if (settings.atlasPerMesh || !settings.atlases.empty()) return false;
+    bool anyTriangles = false;
+    for (const Mesh& mesh : scene.meshes) {
+        if (!mesh.uv1.empty()) return false;
+        anyTriangles = anyTriangles || mesh.triangleCount() > 0;
+    }
+    return anyTriangles;
+}
+
 BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnostics) {
     validateBakeSettings(settings);
     BakeResult result;
@@ -147,6 +166,24 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
     for (const std::string& warning : choice.warnings) diagnostics.warn(warning);
     checkLightAttenuationNames(scene, settings.lighting);
     if (settings.outputs.lightmaps) checkAtlasGroups(scene, settings.lightmap);
+    LightmapSettings lightmap = settings.lightmap;  // generated UVs may need a larger atlas
+    if (settings.outputs.lightmaps && settings.generateLightmapUvs && needsLightmapUvs(scene, settings.lightmap)) {
+        result.lightmapUvs = timed(result.stages, "lightmap uvs", [&] {
+            return generateLightmapUvs(scene, settings.lightmap.width, settings.lightmap.height);
+        });
+        if (!settings.quiet) std::fprintf(stderr, "%s\n", describeLightmapUvs(*result.lightmapUvs).c_str());
+        if (result.lightmapUvs->width != lightmap.width || result.lightmapUvs->height != lightmap.height) {
+            diagnostics.warn(scene.sourcePath + ": the generated lightmap UVs' " +
+                             std::to_string(result.lightmapUvs->charts) + " charts need a " +
+                             std::to_string(result.lightmapUvs->width) + " x " +
+                             std::to_string(result.lightmapUvs->height) + " atlas, not " +
+                             std::to_string(lightmap.width) + " x " + std::to_string(lightmap.height) +
+                             ": the lightmap is baked at that size");
+            lightmap.width = result.lightmapUvs->width;
+            lightmap.height = result.lightmapUvs->height;
+            checkMemoryBudget(scene, settingsWithLightmap(settings, lightmap), voxelSize);
+        }
+    }
     if (scene.lights.empty() && !scene.hasEmitters())
         diagnostics.warn(scene.sourcePath + ": the scene has no lights and no emissive materials: the bake is black");
 
@@ -261,7 +298,7 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
 
     if (settings.outputs.lightmaps) {
         timed(result.stages, "lightmaps", [&] {
-            for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, settings.lightmap, diagnostics)) {
+            for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, lightmap, diagnostics)) {
                 Progress progress("lightmap " + atlas.name, atlas.receivers.elementCount(), settings.quiet);
                 const ReceiverLighting lit = shade(atlas.receivers, sceneView, bvhView, mipView, gathered, true, progress);
                 progress.finish();

@@ -7,6 +7,9 @@
 
 #include "bake/bake_settings.h"
 #include "bake/ray_gather.h"
+#include "unwrap/lightmap_uvs.h"
+
+#include <optional>
 #include "bake/receivers.h"
 #include "bake/voxel_size.h"
 #include "cone/irradiance_cache.h"
@@ -58,6 +61,7 @@ struct BakeResult {
     size_t gatherPoints = 0;  // where the receivers' indirect light was gathered (0: at every sample)
     size_t brightPatches = 0;  // gathered by shadow rays at the gather points (bake/bright_patches.h)
     GatherVisibilityChoice gatherVisibility;  // rays or cones, and why (bake/ray_gather.h)
+    std::optional<LightmapUvReport> lightmapUvs;  // when the bake generated TEXCOORD_1 (unwrap/lightmap_uvs.h)
 };
 
 // Checks that cost nothing (settings ranges, voxel count, memory) run first; throws

@@ -88,6 +88,12 @@ nlohmann::json reportJson(const BakeReport& report, const BakeSettings& settings
     json["bright_patches"] = report.brightPatches;
     json["gather_visibility"] = toString(report.gatherVisibility.visibility);
     json["gather_visibility_set_by"] = report.gatherVisibility.setBy;
+    if (report.lightmapUvs) {
+        const LightmapUvReport& uvs = *report.lightmapUvs;
+        json["lightmap_uvs"] = {{"meshes", uvs.meshes},         {"charts", uvs.charts},
+                                {"texel_size", uvs.texelSize},  {"chart_area_share", uvs.occupancy},
+                                {"max_stretch", uvs.maxStretch}, {"mean_stretch", uvs.meanStretch}};
+    }
     json["lightmap_texels"] = report.lightmapTexels;
     json["covered_texels"] = report.coveredTexels;
     json["pixels"] = report.pixels;
@@ -131,6 +137,7 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
     report.gatherPoints = result.gatherPoints;
     report.brightPatches = result.brightPatches;
     report.gatherVisibility = result.gatherVisibility;
+    report.lightmapUvs = result.lightmapUvs;
 
     const auto writeStart = std::chrono::steady_clock::now();
     StagedFiles files(staging, report);
@@ -162,8 +169,14 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
     if (settings.outputs.gltf && isGltfFile(sourcePath))
         files.add("scene.glb", [&](const std::string& p) {
             std::vector<ExportedLightmap> lightmaps;
-            for (const BakedLightmap& lightmap : result.lightmaps)
-                lightmaps.push_back({lightmap.name, lightmap.meshes, encodeRgbm(lightmap.total)});
+            // Generated UVs are not in the source's primitives yet: their lightmap would point
+            // at a TEXCOORD_1 the file does not have.
+            if (!result.lightmapUvs)
+                for (const BakedLightmap& lightmap : result.lightmaps)
+                    lightmaps.push_back({lightmap.name, lightmap.meshes, encodeRgbm(lightmap.total)});
+            else
+                diagnostics.warn(sourcePath + ": scene.glb carries no lightmap: the bake generated its TEXCOORD_1, "
+                                 "which glTF out does not write yet (the lightmap is in the EXR and PNG files)");
             writeLightmappedGlb(sourcePath, meshSources, lightmaps, p, diagnostics);
         });
     files.writeAll();

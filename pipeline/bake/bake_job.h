@@ -41,6 +41,7 @@ struct BakeReport {
     size_t gatherPoints = 0;
     size_t brightPatches = 0;
     GatherVisibilityChoice gatherVisibility;  // rays or cones, and why
+    std::optional<LightmapUvReport> lightmapUvs;  // when the bake generated TEXCOORD_1
     size_t lightmapTexels = 0;
     size_t coveredTexels = 0;
     size_t pixels = 0;

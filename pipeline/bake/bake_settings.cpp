@@ -109,6 +109,8 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.outputs.images = parseBoolSetting("images", v); }},
         {"grids", "write grids.vdb (default true)",
          [](S& s, const std::string& v) { s.outputs.grids = parseBoolSetting("grids", v); }},
+        {"lightmap-uvs", "generate TEXCOORD_1 charts for a scene none of whose meshes has one (default true)",
+         [](S& s, const std::string& v) { s.generateLightmapUvs = parseBoolSetting("lightmap-uvs", v); }},
         {"gltf", "write scene.glb, the scene with its lightmaps attached (MOZ_lightmap, RGBM PNG) (default true)",
          [](S& s, const std::string& v) { s.outputs.gltf = parseBoolSetting("gltf", v); }},
         // Device
@@ -172,6 +174,7 @@ std::string describeBakeSettings(const BakeSettings& s) {
         out << ", attenuation=" << s.lighting.attenuation->constant << "," << s.lighting.attenuation->linear << ","
             << s.lighting.attenuation->quadratic;
     if (s.device != cuda::DeviceChoice::Cpu) out << ", device=" << cuda::toString(s.device);
+    if (!s.generateLightmapUvs) out << ", lightmap-uvs=false";
     for (size_t g = 0; g < s.lightmap.atlases.size(); ++g) {
         const AtlasGroup& group = s.lightmap.atlases[g];
         out << (g == 0 ? ", atlases=" : "; ") << group.name << ":";

@@ -91,6 +91,8 @@ struct BakeSettings {
     int imageHeight = 256;
     int imageSubsamples = 2;  // n × n primary rays per pixel
     BakeOutputs outputs;
+    // TEXCOORD_1 for scenes that have none (unwrap/lightmap_uvs.h; bake.cpp needsLightmapUvs).
+    bool generateLightmapUvs = true;
     bool strict = false;  // every warning is an error
     bool quiet = false;   // no progress on stderr
     // [added by cuda] Where voxel lighting and receiver shading run (cuda/device_choice.h);

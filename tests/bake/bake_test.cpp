@@ -51,6 +51,18 @@ double coveredMean(const BakedLightmap& l, const Image* image = nullptr) {
     return n ? sum / static_cast<double>(n) : 0.0;
 }
 
+// A quick bake job of a scene file into `out` (emptied first): quiet, 32 voxels, the
+// lightmaps alone.
+BakeJob quickJob(const std::string& scene, const fs::path& out) {
+    fs::remove_all(out);
+    BakeJob job;
+    job.scenePath = scene;
+    job.outputDir = out.string();
+    job.settings = quietSettings();
+    job.settings.voxel.resolution = 32;
+    return job;
+}
+
 // Two rooms [0,1]³ and [1+t, 2+t]×[0,1]² sharing a wall t thick, a point light in the first.
 Scene twoRooms(float wallThickness) {
     Scene scene;
@@ -420,12 +432,7 @@ TEST_CASE("A failed bake leaves no output files and names the problem", "[bake]"
 TEST_CASE("A bake job writes every output, the report and nothing half-finished", "[bake]") {
     VL_SKIP_WITHOUT_SHARED();
     const fs::path out = fs::path(tempDir("bake-job")) / "cornell";
-    fs::remove_all(out);
-    BakeJob job;
-    job.scenePath = sourceDir() + "/scenes/cornell_box.gltf";
-    job.outputDir = out.string();
-    job.settings = quietSettings();
-    job.settings.voxel.resolution = 32;
+    BakeJob job = quickJob(sourceDir() + "/scenes/cornell_box.gltf", out);
     job.settings.lightmap.width = job.settings.lightmap.height = 32;
     job.settings.outputs.grids = true;
     const BakeReport report = runBake(job);
@@ -686,15 +693,7 @@ TEST_CASE("A bake's scene.glb reads back with the same triangles and TEXCOORD_1,
     for (const std::string box : {"quad", "point"}) {
         const std::string source = sharedDir() + "/reference/cornell_" + box + ".gltf";
         const fs::path out = fs::path(tempDir("glb-round-trip")) / box;
-        fs::remove_all(out);
-        BakeJob job;
-        job.scenePath = source;
-        job.outputDir = out.string();
-        job.settings = quietSettings();
-        job.settings.voxel.resolution = 32;
-        job.settings.outputs.images = false;
-        job.settings.outputs.grids = false;
-        const BakeReport report = runBake(job);
+        const BakeReport report = runBake(quickJob(source, out));
         INFO(box << ": " << report.error);
         REQUIRE(report.ok);
         const std::string glb = (out / "scene.glb").string();
@@ -742,5 +741,42 @@ TEST_CASE("A bake's scene.glb reads back with the same triangles and TEXCOORD_1,
         const double error = relativeRmse(decoded, exr, options);
         INFO("RGBM range " << range << ", relative RMSE " << error);
         CHECK(error < 0.01);
+    }
+}
+
+TEST_CASE("A scene without TEXCOORD_1 bakes into generated lightmap UVs, and says so", "[bake]") {
+    // nvpro's Cornell box has no TEXCOORD_1: the bake generates an atlas (unwrap/lightmap_uvs.h)
+    // instead of leaving every mesh out of the lightmap; `lightmap-uvs false` keeps the old
+    // behaviour.
+    VL_SKIP_WITHOUT_SHARED();
+    for (bool generate : {true, false}) {
+        const fs::path out = fs::path(tempDir("generated-uvs")) / (generate ? "on" : "off");
+        BakeJob job = quickJob(sharedDir() + "/scenes/cornellbox-nvpro/cornellBox.gltf", out);
+        job.settings.generateLightmapUvs = generate;
+        const BakeReport report = runBake(job);
+        INFO("generate " << generate << ": " << report.error);
+        REQUIRE(report.ok);
+        const auto warned = [&](const std::string& text) {
+            return std::any_of(report.warnings.begin(), report.warnings.end(),
+                               [&](const std::string& w) { return w.find(text) != std::string::npos; });
+        };
+        if (generate) {
+            REQUIRE(report.lightmapUvs);
+            CHECK(report.lightmapUvs->charts > 10);
+            CHECK(report.coveredTexels > report.lightmapTexels * 4 / 10);  // chart area 49%, less the edges
+            CHECK_FALSE(warned("has no TEXCOORD_1"));
+            CHECK(warned("scene.glb carries no lightmap"));
+            const Image lightmap = readImage((out / "lightmap.exr").string());
+            double sum = 0.0;
+            for (float v : lightmap.pixels) sum += v;
+            CHECK(sum > 0.0);
+            std::ifstream json(out / "bake.json");
+            const std::string text((std::istreambuf_iterator<char>(json)), std::istreambuf_iterator<char>());
+            CHECK_THAT(text, Catch::Contains("\"lightmap_uvs\""));
+        } else {
+            CHECK_FALSE(report.lightmapUvs);
+            CHECK(report.coveredTexels == 0);
+            CHECK(warned("has no TEXCOORD_1"));
+        }
     }
 }

@@ -1,0 +1,51 @@
+// Lightmap UVs for scenes that have none: takes a Scene whose meshes lack TEXCOORD_1 and an
+// atlas size in texels, gives every mesh a TEXCOORD_1 (uv1) in one shared atlas.
+//
+// Charts: triangles joined across shared edges (positions welded exactly) while their normal
+// stays within kChartAngle of the chart's first (largest) triangle, so projecting the chart
+// flat along that normal stretches no triangle's area by more than 1/cos(kChartAngle). Each
+// chart is projected onto the plane of that normal, turned onto its principal axes, and
+// packed into shelves at one world-space texel size for the whole scene (density uniform in
+// world units), the smallest that fits, searched by bisection; every chart keeps
+// kPaddingTexels empty texels on each side, so two charts' texels lie at least 2 × padding
+// apart and neither bilinear filtering nor the bake's dilation of padding mixes them. Vertices
+// shared by two charts are split (positions, normals and the other attributes copied).
+//
+// Why not Blender's Lightmap Pack (one chart per face): a wall of two triangles is then two
+// islands with a seam of padding through it.
+#pragma once
+
+#include "scene/scene.h"
+
+#include <string>
+#include <vector>
+
+namespace vl {
+
+constexpr float kChartAngleDegrees = 30.0f;
+constexpr int kPaddingTexels = 2;
+constexpr int kMaxAtlasSide = 8192;
+
+struct LightmapUvReport {
+    int width = 0, height = 0;  // the atlas, grown from the one asked for where the charts' padding overfilled it
+    size_t meshes = 0;          // meshes given a uv1
+    size_t charts = 0;
+    double texelSize = 0.0;     // metres per texel (the scene's units)
+    double occupancy = 0.0;     // charts' projected area / atlas area, in texels
+    double maxStretch = 1.0;    // largest 3D area / projected area over triangles
+    double meanStretch = 1.0;   // area-weighted
+    double seconds = 0.0;
+};
+
+// Gives every mesh of `scene` with triangles a uv1 in a width × height atlas, or one doubled
+// (up to kMaxAtlasSide a side) until the charts take at least a quarter of it at the smallest
+// texel size that fits: thousands of small charts need room for their padding (the caller
+// bakes at report.width × height). Meshes that already have a uv1 are replaced: the caller
+// decides when to generate. SettingsError for an atlas under 16 texels a side or over 16384;
+// Error when the charts fit no atlas of kMaxAtlasSide.
+LightmapUvReport generateLightmapUvs(Scene& scene, int width, int height);
+
+// "lightmap UVs: 12 meshes, 340 charts, texel 1.2 cm, 71% of the atlas, stretch ≤ 1.15".
+std::string describeLightmapUvs(const LightmapUvReport& report);
+
+}  // namespace vl

@@ -1,0 +1,172 @@
+// Generated lightmap UVs (unwrap/lightmap_uvs.h): charts that never share or touch texels,
+// one texel size for the whole scene, bounded stretch.
+#include "scene/gltf_loader.h"
+#include "support/paths.h"
+#include "unwrap/lightmap_uvs.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <map>
+#include <numeric>
+
+using namespace vl;
+
+namespace {
+
+// Texels each triangle touches (its texel squares overlap the triangle: tested at 8 × 8 points
+// per texel of its bounding box, the box's own corners included), labelled by the triangle's
+// chart: the connected set of triangles sharing uv1 corners. Returns, per texel, the chart
+// (−1 none, −2 two charts).
+std::vector<int> chartTexels(const Scene& scene, int width, int height, int& charts) {
+    // Charts: union-find over (mesh, uv1 corner) keys.
+    std::vector<int> parent;
+    const auto find = [&](int x) {
+        while (parent[size_t(x)] != x) x = parent[size_t(x)] = parent[size_t(parent[size_t(x)])];
+        return x;
+    };
+    std::map<std::tuple<size_t, float, float>, int> cornerId;
+    std::vector<std::array<int, 3>> triangleCorners;
+    std::vector<std::pair<size_t, size_t>> triangles;  // (mesh, triangle)
+    for (size_t m = 0; m < scene.meshes.size(); ++m) {
+        const Mesh& mesh = scene.meshes[m];
+        for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+            std::array<int, 3> ids;
+            for (int k = 0; k < 3; ++k) {
+                const vec2 uv = mesh.uv1[mesh.indices[3 * t + size_t(k)]];
+                const auto [it, added] = cornerId.emplace(std::make_tuple(m, uv.x, uv.y), int(parent.size()));
+                if (added) parent.push_back(int(parent.size()));
+                ids[size_t(k)] = it->second;
+            }
+            parent[size_t(find(ids[1]))] = find(ids[0]);
+            parent[size_t(find(ids[2]))] = find(ids[0]);
+            triangleCorners.push_back(ids);
+            triangles.emplace_back(m, t);
+        }
+    }
+    std::map<int, int> chartOfRoot;
+    std::vector<int> owner(size_t(width) * size_t(height), -1);
+    for (size_t i = 0; i < triangles.size(); ++i) {
+        const int root = find(triangleCorners[i][0]);
+        const int chart = chartOfRoot.emplace(root, int(chartOfRoot.size())).first->second;
+        const Mesh& mesh = scene.meshes[triangles[i].first];
+        vec2 p[3];
+        for (int k = 0; k < 3; ++k)
+            p[k] = mesh.uv1[mesh.indices[3 * triangles[i].second + size_t(k)]] * vec2(float(width), float(height));
+        const float area = (p[1].x - p[0].x) * (p[2].y - p[0].y) - (p[1].y - p[0].y) * (p[2].x - p[0].x);
+        if (area == 0.0f) continue;
+        const auto inside = [&](const vec2& q) {
+            float s[3];
+            for (int k = 0; k < 3; ++k) {
+                const vec2 a = p[k], b = p[(k + 1) % 3];
+                s[k] = ((b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x)) * (area > 0.0f ? 1.0f : -1.0f);
+            }
+            return s[0] >= 0.0f && s[1] >= 0.0f && s[2] >= 0.0f;
+        };
+        const vec2 lo = glm::min(p[0], glm::min(p[1], p[2])), hi = glm::max(p[0], glm::max(p[1], p[2]));
+        for (int y = std::max(0, int(std::floor(lo.y))); y <= std::min(height - 1, int(std::floor(hi.y))); ++y)
+            for (int x = std::max(0, int(std::floor(lo.x))); x <= std::min(width - 1, int(std::floor(hi.x))); ++x) {
+                bool touched = false;
+                for (int j = 0; j <= 8 && !touched; ++j)
+                    for (int i2 = 0; i2 <= 8 && !touched; ++i2)
+                        touched = inside(vec2(float(x) + float(i2) / 8.0f, float(y) + float(j) / 8.0f));
+                // A triangle smaller than the sampling steps still touches its corners' texels.
+                for (int k = 0; k < 3; ++k) touched = touched || (int(std::floor(p[k].x)) == x && int(std::floor(p[k].y)) == y);
+                if (!touched) continue;
+                int& o = owner[size_t(y) * size_t(width) + size_t(x)];
+                o = (o == -1 || o == chart) ? chart : -2;
+            }
+    }
+    charts = int(chartOfRoot.size());
+    return owner;
+}
+
+// The least Chebyshev distance, in texels, between texels of two different charts (a large
+// number when there is one chart).
+int closestCharts(const std::vector<int>& owner, int width, int height) {
+    int closest = 1 << 20;
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const int a = owner[size_t(y) * size_t(width) + size_t(x)];
+            if (a < 0) continue;
+            for (int dy = -3; dy <= 3; ++dy)
+                for (int dx = -3; dx <= 3; ++dx) {
+                    const int u = x + dx, v = y + dy;
+                    if (u < 0 || v < 0 || u >= width || v >= height) continue;
+                    const int b = owner[size_t(v) * size_t(width) + size_t(u)];
+                    if (b >= 0 && b != a) closest = std::min(closest, std::max(std::abs(dx), std::abs(dy)));
+                }
+        }
+    return closest;
+}
+
+void checkAtlas(Scene& scene, const LightmapUvReport& report, const std::string& what) {
+    INFO(what << ": " << describeLightmapUvs(report));
+    int charts = 0;
+    const std::vector<int> owner = chartTexels(scene, report.width, report.height, charts);
+    CHECK(std::count(owner.begin(), owner.end(), -2) == 0);  // no texel of two charts
+    // Two charts' texels at least 2 × 2 padding texels apart, less a texel each side for
+    // the triangles' edges inside their outer texels: at least 3 (2 empty texels between).
+    CHECK(closestCharts(owner, report.width, report.height) >= 3);
+    CHECK(charts == int(report.charts));
+    // One texel size: every triangle's uv area in texels is its 3D area / s², shrunk by at
+    // most cos 30° (its tilt against its chart's plane).
+    const double s2 = report.texelSize * report.texelSize;
+    for (const Mesh& mesh : scene.meshes) {
+        REQUIRE(mesh.uv1.size() == mesh.positions.size());
+        for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+            const uint32_t* i = &mesh.indices[3 * t];
+            const double area3 = 0.5 * glm::length(glm::cross(mesh.positions[i[1]] - mesh.positions[i[0]],
+                                                               mesh.positions[i[2]] - mesh.positions[i[0]]));
+            if (area3 < s2) continue;  // below a texel, uv1's float rounding is a part in a thousand
+            const vec2 a = mesh.uv1[i[0]] * vec2(float(report.width), float(report.height));
+            const vec2 b = mesh.uv1[i[1]] * vec2(float(report.width), float(report.height));
+            const vec2 c = mesh.uv1[i[2]] * vec2(float(report.width), float(report.height));
+            const double texels = 0.5 * std::abs(double(b.x - a.x) * (c.y - a.y) - double(b.y - a.y) * (c.x - a.x));
+            const double ratio = texels * s2 / area3;
+            CHECK(ratio <= 1.0 + 1e-3);
+            CHECK(ratio >= std::cos(glm::radians(double(kChartAngleDegrees))) - 1e-3);
+        }
+    }
+}
+
+}  // namespace
+
+TEST_CASE("A box unwraps into its six faces, packed without overlap at one texel size", "[unwrap]") {
+    VL_SKIP_WITHOUT_SHARED();
+    Scene scene = loadGltf(test::sharedDir() + "/scenes/khronos-sample-assets/Models/BoxTextured/glTF/BoxTextured.gltf");
+    const size_t triangles = scene.meshes[0].triangleCount();
+    const LightmapUvReport report = generateLightmapUvs(scene, 256, 256);
+    CHECK(report.charts == 6);
+    CHECK(report.width == 256);
+    CHECK(report.maxStretch == Approx(1.0).epsilon(1e-4));  // flat faces projected flat
+    // Six squares in shelves of three: at most 6 / 9 of the atlas, at least half of it.
+    CHECK(report.occupancy > 0.5);
+    CHECK(report.occupancy <= 6.0 / 9.0);
+    CHECK(scene.meshes[0].triangleCount() == triangles);
+    CHECK(scene.meshes[0].positions.size() == 24);  // each face's corners its own
+    checkAtlas(scene, report, "BoxTextured");
+}
+
+TEST_CASE("Generated UVs hold on a Cornell box of ten meshes and on a level of 15,000 charts", "[unwrap]") {
+    // nvpro's Cornell box (no TEXCOORD_1) in its 256² atlas; zdm2's thousands of small charts
+    // need more room for their padding: the atlas grows (2048²) rather than failing.
+    VL_SKIP_WITHOUT_SHARED();
+    Scene box = loadGltf(test::sharedDir() + "/scenes/cornellbox-nvpro/cornellBox.gltf");
+    const LightmapUvReport boxReport = generateLightmapUvs(box, 256, 256);
+    CHECK(boxReport.width == 256);
+    CHECK(boxReport.maxStretch <= 1.0 / std::cos(glm::radians(double(kChartAngleDegrees))) + 1e-3);
+    checkAtlas(box, boxReport, "nvpro Cornell box");
+
+    Scene level = loadGltf(test::sharedDir() + "/scenes/interior-zdm2-godot/zdm2.glb");
+    const LightmapUvReport levelReport = generateLightmapUvs(level, 256, 256);
+    CHECK(levelReport.width > 256);
+    CHECK(levelReport.width == levelReport.height);
+    CHECK(levelReport.occupancy >= 0.25);  // the growth rule's floor
+    checkAtlas(level, levelReport, "zdm2");
+}
+
+TEST_CASE("An atlas size outside 16 .. 16384 is refused by name", "[unwrap]") {
+    Scene scene;
+    CHECK_THROWS_WITH(generateLightmapUvs(scene, 8, 256), Catch::Contains("lightmap UVs") && Catch::Contains("8 x 256"));
+}
