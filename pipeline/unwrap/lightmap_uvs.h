@@ -4,9 +4,9 @@
 // Charts: triangles joined across shared edges (positions welded exactly) while their normal
 // stays within kChartAngle of the chart's first (largest) triangle, so projecting the chart
 // flat along that normal stretches no triangle's area by more than 1/cos(kChartAngle). Each
-// chart is projected onto the plane of that normal, turned onto its principal axes, and
-// packed into shelves at one world-space texel size for the whole scene (density uniform in
-// world units), the smallest that fits, searched by bisection; every chart keeps
+// chart is projected onto the plane of that normal, turned to its smallest bounding
+// rectangle, and packed (skyline, bottom-left) at one world-space texel size for the whole
+// scene (density uniform in world units), the smallest that fits, searched by bisection; every chart keeps
 // kPaddingTexels empty texels on each side, so two charts' texels lie at least 2 × padding
 // apart and neither bilinear filtering nor the bake's dilation of padding mixes them. Vertices
 // shared by two charts are split (positions, normals and the other attributes copied).

@@ -118,7 +118,7 @@ void checkAtlas(Scene& scene, const LightmapUvReport& report, const std::string&
             const uint32_t* i = &mesh.indices[3 * t];
             const double area3 = 0.5 * glm::length(glm::cross(mesh.positions[i[1]] - mesh.positions[i[0]],
                                                                mesh.positions[i[2]] - mesh.positions[i[0]]));
-            if (area3 < s2) continue;  // below a texel, uv1's float rounding is a part in a thousand
+            if (area3 < 4.0 * s2) continue;  // below a few texels, uv1's float rounding is a part in a thousand
             const vec2 a = mesh.uv1[i[0]] * vec2(float(report.width), float(report.height));
             const vec2 b = mesh.uv1[i[1]] * vec2(float(report.width), float(report.height));
             const vec2 c = mesh.uv1[i[2]] * vec2(float(report.width), float(report.height));
