@@ -172,6 +172,7 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
             return generateLightmapUvs(scene, settings.lightmap.width, settings.lightmap.height);
         });
         if (!settings.quiet) std::fprintf(stderr, "%s\n", describeLightmapUvs(*result.lightmapUvs).c_str());
+        for (const Mesh& mesh : scene.meshes) result.generatedLayouts.push_back({mesh.source, mesh.uv1, mesh.indices});
         if (result.lightmapUvs->width != lightmap.width || result.lightmapUvs->height != lightmap.height) {
             diagnostics.warn(scene.sourcePath + ": the generated lightmap UVs' " +
                              std::to_string(result.lightmapUvs->charts) + " charts need a " +

@@ -7,6 +7,7 @@
 
 #include "bake/bake_settings.h"
 #include "bake/ray_gather.h"
+#include "export/gltf_export.h"
 #include "unwrap/lightmap_uvs.h"
 
 #include <optional>
@@ -62,6 +63,7 @@ struct BakeResult {
     size_t brightPatches = 0;  // gathered by shadow rays at the gather points (bake/bright_patches.h)
     GatherVisibilityChoice gatherVisibility;  // rays or cones, and why (bake/ray_gather.h)
     std::optional<LightmapUvReport> lightmapUvs;  // when the bake generated TEXCOORD_1 (unwrap/lightmap_uvs.h)
+    std::vector<GeneratedLayout> generatedLayouts;  // then, per scene mesh: what glTF out writes
 };
 
 // Checks that cost nothing (settings ranges, voxel count, memory) run first; throws

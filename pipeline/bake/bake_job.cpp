@@ -169,15 +169,9 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
     if (settings.outputs.gltf && isGltfFile(sourcePath))
         files.add("scene.glb", [&](const std::string& p) {
             std::vector<ExportedLightmap> lightmaps;
-            // Generated UVs are not in the source's primitives yet: their lightmap would point
-            // at a TEXCOORD_1 the file does not have.
-            if (!result.lightmapUvs)
-                for (const BakedLightmap& lightmap : result.lightmaps)
-                    lightmaps.push_back({lightmap.name, lightmap.meshes, encodeRgbm(lightmap.total)});
-            else
-                diagnostics.warn(sourcePath + ": scene.glb carries no lightmap: the bake generated its TEXCOORD_1, "
-                                 "which glTF out does not write yet (the lightmap is in the EXR and PNG files)");
-            writeLightmappedGlb(sourcePath, meshSources, lightmaps, p, diagnostics);
+            for (const BakedLightmap& lightmap : result.lightmaps)
+                lightmaps.push_back({lightmap.name, lightmap.meshes, encodeRgbm(lightmap.total)});
+            writeLightmappedGlb(sourcePath, meshSources, result.generatedLayouts, lightmaps, p, diagnostics);
         });
     files.writeAll();
     report.stages.push_back({"write", std::chrono::duration<double>(std::chrono::steady_clock::now() - writeStart).count()});

@@ -6,6 +6,8 @@
 #include "scene/gltf_model.h"
 
 #include <algorithm>
+#include <cstring>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -16,6 +18,8 @@ namespace {
 constexpr const char* kLightmapExtension = "MOZ_lightmap";
 constexpr int kLinear = 9729;       // GL_LINEAR
 constexpr int kClampToEdge = 33071;  // GL_CLAMP_TO_EDGE
+constexpr int kArrayBuffer = 34962;
+constexpr int kElementArrayBuffer = 34963;
 
 // The one buffer a .glb holds: every byte the file's views and images need, each piece on a
 // 4-byte boundary (accessors' offsets inside a view stay aligned to their components).
@@ -37,6 +41,7 @@ public:
         return offset;
     }
     std::vector<unsigned char>& data() { return data_; }
+    const unsigned char* at(size_t offset) const { return data_.data() + offset; }
 
 private:
     std::vector<unsigned char> data_;
@@ -73,6 +78,92 @@ void packBuffers(tinygltf::Model& model, const gltf::EncodedImages& encoded, Bin
     }
 }
 
+// A new accessor of `bytes` (tightly packed elements of `like`'s type) in a view of its own.
+int addAccessor(tinygltf::Model& model, BinaryBuffer& bin, const tinygltf::Accessor& like,
+                const std::vector<unsigned char>& bytes, size_t count, int target) {
+    tinygltf::Accessor accessor = like;
+    accessor.bufferView = bin.addView(model, bytes.data(), bytes.size());
+    model.bufferViews.back().target = target;
+    accessor.byteOffset = 0;
+    accessor.count = count;
+    accessor.sparse.isSparse = false;
+    accessor.minValues.clear();
+    accessor.maxValues.clear();
+    const int components = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(accessor.type));
+    if (accessor.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT && count > 0) {
+        // min and max (required of POSITION), from the elements themselves.
+        accessor.minValues.assign(size_t(components), std::numeric_limits<double>::max());
+        accessor.maxValues.assign(size_t(components), -std::numeric_limits<double>::max());
+        for (size_t e = 0; e < count; ++e)
+            for (int c = 0; c < components; ++c) {
+                float v;
+                std::memcpy(&v, bytes.data() + (e * size_t(components) + size_t(c)) * sizeof(float), sizeof v);
+                accessor.minValues[size_t(c)] = std::min(accessor.minValues[size_t(c)], double(v));
+                accessor.maxValues[size_t(c)] = std::max(accessor.maxValues[size_t(c)], double(v));
+            }
+    }
+    model.accessors.push_back(accessor);
+    return static_cast<int>(model.accessors.size()) - 1;
+}
+
+// Accessor `index`'s elements at `vertices`, as a new accessor; −1 for a sparse one.
+int gatherAccessor(tinygltf::Model& model, BinaryBuffer& bin, int index, const std::vector<uint32_t>& vertices) {
+    const tinygltf::Accessor source = model.accessors.at(size_t(index));
+    if (source.sparse.isSparse) return -1;
+    const size_t element = size_t(tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(source.componentType))) *
+                           size_t(tinygltf::GetNumComponentsInType(static_cast<uint32_t>(source.type)));
+    std::vector<unsigned char> bytes(vertices.size() * element, 0);
+    if (source.bufferView >= 0) {
+        const tinygltf::BufferView& view = model.bufferViews.at(size_t(source.bufferView));
+        const size_t stride = view.byteStride > 0 ? view.byteStride : element;
+        for (size_t k = 0; k < vertices.size(); ++k) {
+            if (vertices[k] >= source.count) return -1;
+            std::memcpy(&bytes[k * element], bin.at(view.byteOffset + source.byteOffset + vertices[k] * stride), element);
+        }
+    }
+    return addAccessor(model, bin, source, bytes, vertices.size(), kArrayBuffer);
+}
+
+// Writes a mesh's generated layout into primitive `p` of glTF mesh `m`: every attribute
+// gathered at the layout's vertices, TEXCOORD_1, and the triangles (in glTF's winding).
+// False, with nothing changed, for a primitive this cannot rewrite.
+// `original`: the primitive as the file has it (an earlier instance may have rewritten the
+// mesh this one was copied from).
+bool writeLayout(tinygltf::Model& model, BinaryBuffer& bin, int m, int p, const tinygltf::Primitive& original,
+                 const GeneratedLayout& layout) {
+    if (!original.targets.empty()) return false;
+    std::map<std::string, int> attributes;
+    for (const auto& [name, accessor] : original.attributes) {
+        if (name == "TEXCOORD_1") continue;
+        const int gathered = gatherAccessor(model, bin, accessor, layout.source.vertices);
+        if (gathered < 0) return false;
+        attributes[name] = gathered;
+    }
+    tinygltf::Accessor uvLike;
+    uvLike.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+    uvLike.type = TINYGLTF_TYPE_VEC2;
+    std::vector<unsigned char> uvBytes(layout.uv1.size() * sizeof(vec2));
+    std::memcpy(uvBytes.data(), layout.uv1.data(), uvBytes.size());
+    attributes["TEXCOORD_1"] = addAccessor(model, bin, uvLike, uvBytes, layout.uv1.size(), kArrayBuffer);
+    // glTF numbers texture coordinates from 0 without gaps: a primitive without TEXCOORD_0
+    // (no textures) reads the lightmap's coordinates there too, so MOZ_lightmap's texCoord 1
+    // holds for every primitive of a material.
+    if (!attributes.count("TEXCOORD_0")) attributes["TEXCOORD_0"] = attributes["TEXCOORD_1"];
+    std::vector<uint32_t> triangles = layout.indices;
+    if (layout.source.mirrored)  // the loader swapped two corners: swap them back
+        for (size_t t = 0; t + 2 < triangles.size(); t += 3) std::swap(triangles[t + 1], triangles[t + 2]);
+    tinygltf::Accessor indexLike;
+    indexLike.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+    indexLike.type = TINYGLTF_TYPE_SCALAR;
+    std::vector<unsigned char> indexBytes(triangles.size() * sizeof(uint32_t));
+    std::memcpy(indexBytes.data(), triangles.data(), indexBytes.size());
+    tinygltf::Primitive& primitive = model.meshes.at(size_t(m)).primitives.at(size_t(p));
+    primitive.indices = addAccessor(model, bin, indexLike, indexBytes, triangles.size(), kElementArrayBuffer);
+    primitive.attributes = attributes;
+    primitive.mode = TINYGLTF_MODE_TRIANGLES;
+    return true;
+}
+
 // MOZ_lightmap of a material: the lightmap's texture, read through TEXCOORD_1, scaled by
 // the RGBM range.
 tinygltf::Value lightmapExtension(int texture, float range) {
@@ -86,14 +177,56 @@ tinygltf::Value lightmapExtension(int texture, float range) {
 }  // namespace
 
 void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Source>& meshes,
-                         const std::vector<ExportedLightmap>& lightmaps, const std::string& path,
-                         Diagnostics& diagnostics) {
+                         const std::vector<GeneratedLayout>& layouts, const std::vector<ExportedLightmap>& lightmaps,
+                         const std::string& path, Diagnostics& diagnostics) {
+    if (!layouts.empty() && layouts.size() != meshes.size())
+        throw Error("writeLightmappedGlb: " + std::to_string(layouts.size()) + " layouts for " +
+                    std::to_string(meshes.size()) + " meshes");
     tinygltf::Model model;
     gltf::EncodedImages encoded;
     readGltfModel(source, model, encoded);
 
     BinaryBuffer bin;
     packBuffers(model, encoded, bin, source, diagnostics);
+
+    // Generated layouts: each node's instance of a glTF mesh gets its own mesh (the first
+    // node keeps the original), whose primitives take the layout's vertices and TEXCOORD_1.
+    std::map<int, int> meshOfNode;  // node → the glTF mesh its instance writes to
+    std::set<std::pair<int, int>> unlit;  // (glTF mesh, primitive) left without a lightmap
+    {
+        const std::vector<tinygltf::Mesh> originals = model.meshes;
+        std::set<int> claimed;  // glTF meshes a node has taken
+        for (size_t k = 0; k < layouts.size(); ++k) {
+            const Mesh::Source& from = meshes[k];
+            if (layouts[k].uv1.empty() || from.node < 0 || static_cast<size_t>(from.node) >= model.nodes.size() ||
+                from.mesh < 0 || static_cast<size_t>(from.mesh) >= model.meshes.size())
+                continue;
+            if (!meshOfNode.count(from.node)) {
+                if (claimed.insert(from.mesh).second) {
+                    meshOfNode[from.node] = from.mesh;
+                } else {
+                    model.meshes.push_back(originals[size_t(from.mesh)]);
+                    meshOfNode[from.node] = static_cast<int>(model.meshes.size()) - 1;
+                    model.nodes[size_t(from.node)].mesh = meshOfNode[from.node];
+                }
+            }
+            const int target = meshOfNode[from.node];
+            if (from.primitive < 0 || static_cast<size_t>(from.primitive) >= originals[size_t(from.mesh)].primitives.size())
+                continue;
+            if (!writeLayout(model, bin, target, from.primitive, originals[size_t(from.mesh)].primitives[size_t(from.primitive)],
+                             layouts[k])) {
+                unlit.insert({target, from.primitive});
+                diagnostics.warn(source + ": mesh " + std::to_string(from.mesh) + " primitive " +
+                                 std::to_string(from.primitive) +
+                                 " has morph targets or sparse attributes, which glTF out does not rewrite: "
+                                 "scene.glb shows it without its lightmap");
+            }
+        }
+    }
+    const auto gltfMeshOf = [&](const Mesh::Source& from) {
+        const auto it = meshOfNode.find(from.node);
+        return it == meshOfNode.end() ? from.mesh : it->second;
+    };
 
     // Each lightmap: its PNG, a linear clamped sampler (no mipmaps: averaging RGBM texels is
     // not averaging light) and a texture.
@@ -127,10 +260,12 @@ void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Sour
         for (uint32_t m : lightmaps[a].meshes) {
             if (m >= meshes.size()) throw Error("writeLightmappedGlb: mesh " + std::to_string(m) + " does not exist");
             const Mesh::Source& from = meshes[m];
-            if (from.mesh < 0 || static_cast<size_t>(from.mesh) >= model.meshes.size() || from.primitive < 0 ||
-                static_cast<size_t>(from.primitive) >= model.meshes[size_t(from.mesh)].primitives.size())
+            const int target = gltfMeshOf(from);
+            if (target < 0 || static_cast<size_t>(target) >= model.meshes.size() || from.primitive < 0 ||
+                static_cast<size_t>(from.primitive) >= model.meshes[size_t(target)].primitives.size())
                 continue;  // made in code, not read from the file
-            const auto [it, added] = atlasOf.emplace(std::make_pair(from.mesh, from.primitive), a);
+            if (unlit.count({target, from.primitive})) continue;
+            const auto [it, added] = atlasOf.emplace(std::make_pair(target, from.primitive), a);
             if (!added && it->second != a)
                 diagnostics.warn(source + ": mesh " + std::to_string(from.mesh) + " primitive " +
                                  std::to_string(from.primitive) + " is placed by nodes baked into lightmaps '" +

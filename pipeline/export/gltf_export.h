@@ -22,6 +22,14 @@
 
 namespace vl {
 
+// A mesh's TEXCOORD_1 that the bake made (unwrap/lightmap_uvs.h), for glTF out to write into
+// the mesh's primitive with the vertices split as the bake split them (source.vertices).
+struct GeneratedLayout {
+    Mesh::Source source;
+    std::vector<vec2> uv1;
+    std::vector<uint32_t> indices;  // triangles in the bake's winding (source.mirrored: swapped)
+};
+
 struct ExportedLightmap {
     std::string name;              // the atlas ("lightmap", a group's name): the image's name
     std::vector<uint32_t> meshes;  // indices into Scene::meshes baked into it
@@ -30,10 +38,13 @@ struct ExportedLightmap {
 
 // Writes `path` (atomically) from the glTF file `source` re-read; `meshes` are the scene's
 // meshes as loaded from it (Scene::meshes' sources, by the indices the lightmaps use).
-// InputError naming the file when the source no longer reads; Error naming `path` when it
-// cannot be written.
+// `layouts`, when not empty, holds one per mesh: the generated TEXCOORD_1 to write (a mesh
+// without uv1 is left as it is). A glTF mesh that several nodes place gets a copy per further
+// node, since each instance has charts of its own. A primitive with morph targets or sparse
+// attributes keeps its own vertices and no lightmap (a warning). InputError naming the file
+// when the source no longer reads; Error naming `path` when it cannot be written.
 void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Source>& meshes,
-                         const std::vector<ExportedLightmap>& lightmaps, const std::string& path,
-                         Diagnostics& diagnostics);
+                         const std::vector<GeneratedLayout>& layouts, const std::vector<ExportedLightmap>& lightmaps,
+                         const std::string& path, Diagnostics& diagnostics);
 
 }  // namespace vl

@@ -618,7 +618,10 @@ private:
             if (out.indices.empty()) continue;
             out.name = baseName + "/" + std::to_string(p);
             out.node = model_.nodes[static_cast<size_t>(nodeIndex)].name;
-            out.source = {meshIndex, static_cast<int>(p)};
+            out.source.mesh = meshIndex;
+            out.source.primitive = static_cast<int>(p);
+            out.source.node = nodeIndex;
+            out.source.mirrored = det < 0.0;
             scene_.meshes.push_back(std::move(out));
         }
     }

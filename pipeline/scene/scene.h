@@ -69,6 +69,11 @@ struct Mesh {
     struct Source {
         int mesh = -1;
         int primitive = -1;
+        int node = -1;          // the node that places this instance
+        bool mirrored = false;  // its transform mirrors: the loader swapped two corners of each triangle
+        // Each vertex's index in the glTF primitive where the vertices were split after
+        // loading (generated lightmap UVs); empty: the primitive's own order.
+        std::vector<uint32_t> vertices;
     } source;
     int material = -1;         // index into Scene::materials; -1 = the glTF default material
     std::vector<vec3> positions;

@@ -323,6 +323,7 @@ LightmapUvReport generateLightmapUvs(Scene& scene, int width, int height) {
         out.uv0.clear();
         out.colors.clear();
         out.uv1.clear();
+        out.source.vertices.clear();
         out.indices.assign(mesh.indices.size(), 0);
         std::unordered_map<uint64_t, uint32_t> vertexOf;  // (old vertex, chart) → new vertex
         for (uint32_t c : chartsOf[m]) {
@@ -334,6 +335,7 @@ LightmapUvReport generateLightmapUvs(Scene& scene, int width, int height) {
                     if (added) {
                         const vec3& p = mesh.positions[old];
                         out.positions.push_back(p);
+                        out.source.vertices.push_back(mesh.source.vertices.empty() ? old : mesh.source.vertices[old]);
                         if (!mesh.normals.empty()) out.normals.push_back(mesh.normals[old]);
                         if (!mesh.uv0.empty()) out.uv0.push_back(mesh.uv0[old]);
                         if (!mesh.colors.empty()) out.colors.push_back(mesh.colors[old]);

@@ -765,7 +765,34 @@ TEST_CASE("A scene without TEXCOORD_1 bakes into generated lightmap UVs, and say
             CHECK(report.lightmapUvs->charts > 10);
             CHECK(report.coveredTexels > report.lightmapTexels * 4 / 10);  // chart area 49%, less the edges
             CHECK_FALSE(warned("has no TEXCOORD_1"));
-            CHECK(warned("scene.glb carries no lightmap"));
+            // scene.glb carries the generated TEXCOORD_1: read back, the same triangles
+            // (corner by corner: the loader meets the file's winding as before), every mesh
+            // with a uv1 and every material with the lightmap.
+            const Scene original = loadGltf(job.scenePath), back = loadGltf((out / "scene.glb").string());
+            REQUIRE(back.meshes.size() == original.meshes.size());
+            for (size_t m = 0; m < back.meshes.size(); ++m) {
+                const Mesh &a = original.meshes[m], &b = back.meshes[m];
+                INFO("mesh " << a.name);
+                CHECK(b.uv1.size() == b.positions.size());
+                REQUIRE(b.indices.size() == a.indices.size());
+                size_t same = 0;
+                for (size_t i = 0; i < a.indices.size(); ++i)
+                    same += a.positions[a.indices[i]] == b.positions[b.indices[i]] ? 1 : 0;
+                CHECK(same == a.indices.size());
+            }
+            tinygltf::Model model;
+            gltf::EncodedImages encoded;
+            readGltfModel((out / "scene.glb").string(), model, encoded);
+            for (const tinygltf::Mesh& mesh : model.meshes)
+                for (const tinygltf::Primitive& primitive : mesh.primitives) {
+                    CHECK(primitive.attributes.count("TEXCOORD_1") == 1);
+                    REQUIRE(primitive.material >= 0);
+                    // All but the light: the bake leaves emitters out of the lightmap.
+                    const tinygltf::Material& material = model.materials[size_t(primitive.material)];
+                    const bool emits = material.emissiveFactor[0] + material.emissiveFactor[1] + material.emissiveFactor[2] > 0.0;
+                    INFO("material " << material.name);
+                    CHECK(material.extensions.count("MOZ_lightmap") == (emits ? 0u : 1u));
+                }
             const Image lightmap = readImage((out / "lightmap.exr").string());
             double sum = 0.0;
             for (float v : lightmap.pixels) sum += v;

@@ -43,8 +43,11 @@ TEST_CASE("Every scene.glb the bake writes passes the Khronos glTF validator wit
     settings.outputs.grids = false;
     std::vector<BakeJob> jobs = readJobFile(sourceDir() + "/tools/bench/zdm2.json", settings, tempDir("glb-validator"));
     REQUIRE(jobs.size() == 1);
+    const std::string khronos = sharedDir() + "/scenes/khronos-sample-assets/Models/";
     for (const std::string& scene : std::vector<std::string>{sharedDir() + "/reference/cornell_quad.gltf",
-                                    sharedDir() + "/scenes/khronos-sample-assets/Models/BoxTextured/glTF/BoxTextured.gltf"}) {
+                                                             khronos + "BoxTextured/glTF/BoxTextured.gltf",
+                                                             khronos + "NegativeScaleTest/glTF/NegativeScaleTest.gltf",
+                                                             khronos + "SimpleInstancing/glTF/SimpleInstancing.gltf"}) {
         BakeJob job;
         job.scenePath = scene;
         job.settings = settings;
