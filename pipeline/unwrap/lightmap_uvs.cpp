@@ -41,6 +41,29 @@ struct PositionHash {
     }
 };
 
+// Whether two triangles of a plane overlap in area: no edge normal of either separates them
+// by more than `slack` (triangles that share an edge or a corner only touch).
+bool overlapIn2d(const vec2 (&a)[3], const vec2 (&b)[3], float slack) {
+    const vec2* sides[2] = {a, b};
+    for (const vec2* tri : sides)
+        for (int k = 0; k < 3; ++k) {
+            const vec2 edge = tri[(k + 1) % 3] - tri[k];
+            const vec2 axis(-edge.y, edge.x);
+            const float length = glm::length(axis);
+            if (!(length > 0.0f)) continue;
+            float loA = std::numeric_limits<float>::max(), hiA = -loA, loB = loA, hiB = -loA;
+            for (int j = 0; j < 3; ++j) {
+                const float pa = glm::dot(a[j], axis) / length, pb = glm::dot(b[j], axis) / length;
+                loA = std::min(loA, pa);
+                hiA = std::max(hiA, pa);
+                loB = std::min(loB, pb);
+                hiB = std::max(hiB, pb);
+            }
+            if (hiA <= loB + slack || hiB <= loA + slack) return false;
+        }
+    return true;
+}
+
 // The charts of one mesh (see the header).
 std::vector<Chart> meshCharts(const Mesh& mesh, uint32_t meshIndex) {
     const size_t triangles = mesh.triangleCount();
@@ -66,6 +89,53 @@ std::vector<Chart> meshCharts(const Mesh& mesh, uint32_t meshIndex) {
     std::vector<int32_t> chartOf(triangles, -1);
     std::vector<Chart> charts;
     std::vector<uint32_t> queue;
+    // A chart refuses a triangle whose projection would overlap one it holds (a surface that
+    // folds back under itself within the cone: zdm2 had 6,886 overlapping sub-texel points
+    // without this); the refused triangle starts or joins another chart. The chart's
+    // triangles are found by a grid of cells about twice a triangle's size.
+    double totalArea = 0.0;
+    for (float a : area) totalArea += a;
+    const float cell = std::max(1e-12f, 2.0f * std::sqrt(float(totalArea / double(std::max<size_t>(triangles, 1)))));
+    const float slack = 1e-5f * cell;
+    std::unordered_map<uint64_t, std::vector<uint32_t>> grid;  // the current chart's triangles by cell
+    const auto cellKey = [](int x, int y) { return (uint64_t(uint32_t(x)) << 32) | uint32_t(y); };
+    const auto flat = [&](uint32_t t, const Chart& chart, vec2 (&p)[3]) {
+        for (int k = 0; k < 3; ++k) {
+            const vec3& q = mesh.positions[mesh.indices[3 * size_t(t) + size_t(k)]];
+            p[k] = vec2(glm::dot(q, chart.axisU), glm::dot(q, chart.axisV));
+        }
+    };
+    const auto cells = [&](const vec2 (&p)[3], auto&& visit) {
+        const vec2 lo = glm::min(p[0], glm::min(p[1], p[2])) / cell, hi = glm::max(p[0], glm::max(p[1], p[2])) / cell;
+        for (int y = int(std::floor(lo.y)); y <= int(std::floor(hi.y)); ++y)
+            for (int x = int(std::floor(lo.x)); x <= int(std::floor(hi.x)); ++x) visit(cellKey(x, y));
+    };
+    const auto overlapsChart = [&](uint32_t t, const Chart& chart) {
+        if (!(area[t] > 0.0f)) return false;
+        vec2 p[3];
+        flat(t, chart, p);
+        bool overlaps = false;
+        cells(p, [&](uint64_t key) {
+            if (overlaps) return;
+            const auto it = grid.find(key);
+            if (it == grid.end()) return;
+            for (uint32_t other : it->second) {
+                vec2 o[3];
+                flat(other, chart, o);
+                if (overlapIn2d(p, o, slack)) {
+                    overlaps = true;
+                    return;
+                }
+            }
+        });
+        return overlaps;
+    };
+    const auto hold = [&](uint32_t t, const Chart& chart) {
+        if (!(area[t] > 0.0f)) return;
+        vec2 p[3];
+        flat(t, chart, p);
+        cells(p, [&](uint64_t key) { grid[key].push_back(t); });
+    };
     for (uint32_t seed : order) {
         if (chartOf[seed] >= 0) continue;
         const int32_t c = static_cast<int32_t>(charts.size());
@@ -76,6 +146,8 @@ std::vector<Chart> meshCharts(const Mesh& mesh, uint32_t meshIndex) {
         orthonormalBasis(n, chart.axisU, chart.axisV);
         chartOf[seed] = c;
         queue.assign(1, seed);
+        grid.clear();
+        hold(seed, chart);
         for (size_t q = 0; q < queue.size(); ++q) {
             const uint32_t t = queue[q];
             chart.triangles.push_back(t);
@@ -85,7 +157,9 @@ std::vector<Chart> meshCharts(const Mesh& mesh, uint32_t meshIndex) {
                     if (chartOf[other] >= 0) continue;
                     // A zero-area triangle projects to nothing wherever it goes.
                     if (area[other] > 0.0f && !(glm::dot(normal[other], n) >= minCos)) continue;
+                    if (overlapsChart(other, chart)) continue;
                     chartOf[other] = c;
+                    hold(other, chart);
                     queue.push_back(other);
                 }
         }

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <set>
 
 using namespace vl;
 
@@ -100,6 +101,53 @@ int closestCharts(const std::vector<int>& owner, int width, int height) {
     return closest;
 }
 
+// Pairs of triangles of one mesh whose uv1 triangles overlap in area by more than a
+// thousandth of a texel along every separating axis (triangles sharing an edge only touch).
+// Triangles are bucketed by the texels their boxes cover.
+size_t overlappingPairs(const Scene& scene, int width, int height) {
+    size_t pairs = 0;
+    const vec2 size{float(width), float(height)};
+    for (const Mesh& mesh : scene.meshes) {
+        std::map<std::pair<int, int>, std::vector<size_t>> buckets;
+        const auto corners = [&](size_t t, vec2 (&p)[3]) {
+            for (int k = 0; k < 3; ++k) p[k] = mesh.uv1[mesh.indices[3 * t + size_t(k)]] * size;
+        };
+        for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+            vec2 p[3];
+            corners(t, p);
+            const vec2 lo = glm::min(p[0], glm::min(p[1], p[2])), hi = glm::max(p[0], glm::max(p[1], p[2]));
+            for (int y = int(lo.y); y <= int(hi.y); ++y)
+                for (int x = int(lo.x); x <= int(hi.x); ++x) buckets[{x, y}].push_back(t);
+        }
+        std::set<std::pair<size_t, size_t>> seen;
+        for (const auto& [cell, list] : buckets)
+            for (size_t i = 0; i < list.size(); ++i)
+                for (size_t j = i + 1; j < list.size(); ++j) {
+                    vec2 a[3], b[3];
+                    corners(list[i], a);
+                    corners(list[j], b);
+                    bool separated = false;
+                    for (const vec2* tri : {a, b})
+                        for (int k = 0; k < 3 && !separated; ++k) {
+                            const vec2 e = tri[(k + 1) % 3] - tri[k];
+                            vec2 axis(-e.y, e.x);
+                            if (!(glm::length(axis) > 0.0f)) continue;
+                            axis /= glm::length(axis);
+                            float loA = 1e30f, hiA = -1e30f, loB = 1e30f, hiB = -1e30f;
+                            for (int q = 0; q < 3; ++q) {
+                                loA = std::min(loA, glm::dot(a[q], axis));
+                                hiA = std::max(hiA, glm::dot(a[q], axis));
+                                loB = std::min(loB, glm::dot(b[q], axis));
+                                hiB = std::max(hiB, glm::dot(b[q], axis));
+                            }
+                            separated = hiA <= loB + 1e-3f || hiB <= loA + 1e-3f;
+                        }
+                    if (!separated && seen.insert({list[i], list[j]}).second) ++pairs;
+                }
+    }
+    return pairs;
+}
+
 void checkAtlas(Scene& scene, const LightmapUvReport& report, const std::string& what) {
     INFO(what << ": " << describeLightmapUvs(report));
     int charts = 0;
@@ -109,6 +157,9 @@ void checkAtlas(Scene& scene, const LightmapUvReport& report, const std::string&
     // the triangles' edges inside their outer texels: at least 3 (2 empty texels between).
     CHECK(closestCharts(owner, report.width, report.height) >= 3);
     CHECK(charts == int(report.charts));
+    // Within a chart too: a surface folding back under itself within the chart's cone is
+    // refused, not projected over itself.
+    CHECK(overlappingPairs(scene, report.width, report.height) == 0);
     // One texel size: every triangle's uv area in texels is its 3D area / s², shrunk by at
     // most cos 30° (its tilt against its chart's plane).
     const double s2 = report.texelSize * report.texelSize;
