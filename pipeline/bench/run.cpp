@@ -92,6 +92,11 @@ void runVctPoint(const BenchOptions& options, const Comparer& comparer, BenchPoi
     for (const auto& [name, value] : p.spec.settings) applySetting(bakeSettingsTable(), job.settings, name, value);
     job.settings.outputs.grids = false;  // files that package the bake, not the bake
     job.settings.outputs.gltf = false;
+    // Only what the reference can rate: zdm2 has no TEXCOORD_1, so its reference has no
+    // lightmap, while the bake would generate UVs and spend seconds on a 2048² lightmap that
+    // the image's time then included.
+    if (!comparer.ref.hasLightmap) job.settings.outputs.lightmaps = false;
+    if (!comparer.ref.hasImage) job.settings.outputs.images = false;
     job.settings.quiet = true;
     validateBakeSettings(job.settings);
     p.outputDir = "points/vct-" + fileSafe(p.spec.label);
