@@ -41,7 +41,7 @@ TEST_CASE("Every scene.glb the bake writes passes the Khronos glTF validator wit
     settings.voxel.resolution = 32;
     settings.outputs.images = false;
     settings.outputs.grids = false;
-    settings.lightmap.subsamplesPerAxis = 1;  // what is checked is the file, not the light: zdm2's 2048² lightmap in 1/16 the time
+    settings.lightmap.subsamplesPerAxis = 1;  // what is checked is the file, not the light: zdm2's grown lightmap in 1/16 the time
     std::vector<BakeJob> jobs = readJobFile(sourceDir() + "/tools/bench/zdm2.json", settings, tempDir("glb-validator"));
     REQUIRE(jobs.size() == 1);
     const std::string khronos = sharedDir() + "/scenes/khronos-sample-assets/Models/";
