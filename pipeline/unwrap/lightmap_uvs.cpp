@@ -310,6 +310,8 @@ LightmapUvReport generateLightmapUvs(Scene& scene, int width, int height) {
                             " texels is outside 16 .. 16384 a side");
     const auto start = std::chrono::steady_clock::now();
     LightmapUvReport report;
+    report.width = width;
+    report.height = height;
     std::vector<std::vector<Chart>> perMesh(scene.meshes.size());
     tbb::parallel_for(size_t(0), scene.meshes.size(), [&](size_t m) {
         if (scene.meshes[m].triangleCount() > 0) perMesh[m] = meshCharts(scene.meshes[m], uint32_t(m));

@@ -217,7 +217,11 @@ TEST_CASE("Generated UVs hold on a Cornell box of ten meshes and on a level of 1
     checkAtlas(level, levelReport, "zdm2");
 }
 
-TEST_CASE("An atlas size outside 16 .. 16384 is refused by name", "[unwrap]") {
+TEST_CASE("An atlas size outside 16 .. 16384 is refused by name; a scene without triangles keeps its atlas", "[unwrap]") {
     Scene scene;
     CHECK_THROWS_WITH(generateLightmapUvs(scene, 8, 256), Catch::Contains("lightmap UVs") && Catch::Contains("8 x 256"));
+    const LightmapUvReport report = generateLightmapUvs(scene, 64, 32);
+    CHECK(report.charts == 0);
+    CHECK(report.width == 64);  // the bake takes this size: never 0
+    CHECK(report.height == 32);
 }
