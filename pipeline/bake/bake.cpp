@@ -136,11 +136,6 @@ double totalSeconds(const std::vector<StageTime>& stages) {
 // give it a lightmap. Where some meshes have their own layout (a Blender lightmap pack), or
 // atlas groups or one image per mesh are asked for, generated charts would share images with
 // those layouts: not yet; those meshes stay out of the lightmap with a warning, as before.
-BakeSettings settingsWithLightmap(BakeSettings settings, const LightmapSettings& lightmap) {
-    settings.lightmap = lightmap;
-    return settings;
-}
-
 bool needsLightmapUvs(const Scene& scene, const LightmapSettings& settings) {
     if (settings.atlasPerMesh || !settings.atlases.empty()) return false;
     bool anyTriangles = false;
@@ -182,7 +177,9 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
                              ": the lightmap is baked at that size");
             lightmap.width = result.lightmapUvs->width;
             lightmap.height = result.lightmapUvs->height;
-            checkMemoryBudget(scene, settingsWithLightmap(settings, lightmap), voxelSize);
+            BakeSettings grown = settings;
+            grown.lightmap = lightmap;
+            checkMemoryBudget(scene, grown, voxelSize);
         }
     }
     if (scene.lights.empty() && !scene.hasEmitters())

@@ -7,10 +7,6 @@
 
 #include "bake/bake_settings.h"
 #include "bake/ray_gather.h"
-#include "export/gltf_export.h"
-#include "unwrap/lightmap_uvs.h"
-
-#include <optional>
 #include "bake/receivers.h"
 #include "bake/voxel_size.h"
 #include "cone/irradiance_cache.h"
@@ -18,8 +14,11 @@
 #include "core/diagnostics.h"
 #include "core/image.h"
 #include "scene/scene.h"
+#include "export/gltf_export.h"
+#include "unwrap/lightmap_uvs.h"
 #include "voxel/voxel_scene.h"
 
+#include <optional>
 #include <string>
 #include <vector>
 

@@ -132,8 +132,9 @@ void readHitTexels(const HitLookup& level0, IndexLeafCache& leaves, const Ray& r
         travel[a] = 2 * a + (seen[a] > 0.0f ? 1 : 0);
         float best = 0.0f;
         // The hit's own voxel first: where it shows the face whole (coverage 1, no voxel shows
-        // more) its neighbours are not looked up, which most hits on a wall are spared (their
-        // lookups were 60% of the gather's time).
+        // more) its neighbours are not looked up, which most hits on a wall are spared (the
+        // reads were 60% of the trace: the quad box's 16 × 16 transport took 0.08 s, 0.03 s
+        // with them skipped; 0.06 s reading the own voxel first, the same lightmaps).
         for (int k : {0, -1, 1}) {
             ivec3 c = centre;
             c[a] += k;
@@ -215,6 +216,7 @@ FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
         Chunk& part = parts[c];
         Scratch& scratch = scratches.local();
+        scratch.weight.resize(voxelCount * 6, 0.0f);  // once per thread: every slot a hit can read
         IndexLeafCache leaves;
         const size_t first = c * kChunkPoints, last = std::min(points.size(), first + kChunkPoints);
         for (size_t q = first; q < last; ++q) {
@@ -223,7 +225,6 @@ FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView
                               [&](int32_t voxel, int travel, float weight) {
                                   // The texel of travel t shows face t ^ 1 (radiance_mips.h).
                                   const uint32_t slot = uint32_t(voxel) * 6u + uint32_t(travel ^ 1);
-                                  if (slot >= scratch.weight.size()) scratch.weight.resize(size_t(slot) * 2 + 6, 0.0f);
                                   if (scratch.weight[slot] == 0.0f) scratch.read.push_back(slot);
                                   scratch.weight[slot] += weight * rayWeight;
                               });

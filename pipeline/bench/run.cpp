@@ -93,8 +93,8 @@ void runVctPoint(const BenchOptions& options, const Comparer& comparer, BenchPoi
     job.settings.outputs.grids = false;  // files that package the bake, not the bake
     job.settings.outputs.gltf = false;
     // Only what the reference can rate: zdm2 has no TEXCOORD_1, so its reference has no
-    // lightmap, while the bake would generate UVs and spend seconds on a 2048² lightmap that
-    // the image's time then included.
+    // lightmap, while the bake would generate UVs and spend seconds on a lightmap of the atlas
+    // they grow to, which the image's time then included (2.08 s against 0.79 s).
     if (!comparer.ref.hasLightmap) job.settings.outputs.lightmaps = false;
     if (!comparer.ref.hasImage) job.settings.outputs.images = false;
     job.settings.quiet = true;

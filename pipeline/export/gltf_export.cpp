@@ -174,6 +174,142 @@ tinygltf::Value lightmapExtension(int texture, float range) {
     return tinygltf::Value(object);
 }
 
+using PrimitiveKey = std::pair<int, int>;  // (glTF mesh, primitive)
+
+// Where the generated layouts went: each node's instance of a glTF mesh gets its own mesh (the
+// first node keeps the original), whose primitives take the layout's vertices and TEXCOORD_1.
+struct WrittenLayouts {
+    std::map<int, int> meshOfNode;  // node → the glTF mesh its instance writes to
+    std::set<PrimitiveKey> unlit;   // primitives left without a lightmap
+    int gltfMesh(const Mesh::Source& from) const {
+        const auto it = meshOfNode.find(from.node);
+        return it == meshOfNode.end() ? from.mesh : it->second;
+    }
+};
+
+WrittenLayouts writeLayouts(tinygltf::Model& model, BinaryBuffer& bin, const std::vector<Mesh::Source>& meshes,
+                            const std::vector<GeneratedLayout>& layouts, const std::string& source,
+                            Diagnostics& diagnostics) {
+    WrittenLayouts written;
+    const std::vector<tinygltf::Mesh> originals = model.meshes;
+    std::set<int> claimed;  // glTF meshes a node has taken
+    for (size_t k = 0; k < layouts.size(); ++k) {
+        const Mesh::Source& from = meshes[k];
+        if (layouts[k].uv1.empty() || from.node < 0 || static_cast<size_t>(from.node) >= model.nodes.size() ||
+            from.mesh < 0 || static_cast<size_t>(from.mesh) >= model.meshes.size() || from.primitive < 0 ||
+            static_cast<size_t>(from.primitive) >= originals[size_t(from.mesh)].primitives.size())
+            continue;
+        if (!written.meshOfNode.count(from.node)) {
+            if (claimed.insert(from.mesh).second) {
+                written.meshOfNode[from.node] = from.mesh;
+            } else {
+                model.meshes.push_back(originals[size_t(from.mesh)]);
+                written.meshOfNode[from.node] = static_cast<int>(model.meshes.size()) - 1;
+                model.nodes[size_t(from.node)].mesh = written.meshOfNode[from.node];
+            }
+        }
+        const int target = written.meshOfNode[from.node];
+        if (!writeLayout(model, bin, target, from.primitive, originals[size_t(from.mesh)].primitives[size_t(from.primitive)],
+                         layouts[k])) {
+            written.unlit.insert({target, from.primitive});
+            diagnostics.warn(source + ": mesh " + std::to_string(from.mesh) + " primitive " + std::to_string(from.primitive) +
+                             " has morph targets or sparse attributes, which glTF out does not rewrite: "
+                             "scene.glb shows it without its lightmap");
+        }
+    }
+    return written;
+}
+
+// Each lightmap's PNG, with a linear clamped sampler (no mipmaps: averaging RGBM texels is not
+// averaging light), as a texture; their indices.
+std::vector<int> addLightmapTextures(tinygltf::Model& model, BinaryBuffer& bin, const std::vector<ExportedLightmap>& lightmaps) {
+    std::vector<int> textureOf;
+    if (lightmaps.empty()) return textureOf;
+    tinygltf::Sampler sampler;
+    sampler.magFilter = kLinear;
+    sampler.minFilter = kLinear;
+    sampler.wrapS = kClampToEdge;
+    sampler.wrapT = kClampToEdge;
+    sampler.name = "lightmap";
+    model.samplers.push_back(sampler);
+    const int samplerIndex = static_cast<int>(model.samplers.size()) - 1;
+    for (const ExportedLightmap& lightmap : lightmaps) {
+        const std::vector<uint8_t> png = rgbmPng(lightmap.encoded);
+        tinygltf::Image image;
+        image.name = lightmap.name;
+        image.mimeType = "image/png";
+        image.bufferView = bin.addView(model, png.data(), png.size());
+        model.images.push_back(image);
+        tinygltf::Texture texture;
+        texture.name = lightmap.name;
+        texture.source = static_cast<int>(model.images.size()) - 1;
+        texture.sampler = samplerIndex;
+        model.textures.push_back(texture);
+        textureOf.push_back(static_cast<int>(model.textures.size()) - 1);
+    }
+    return textureOf;
+}
+
+// Which lightmap each glTF primitive was baked into.
+std::map<PrimitiveKey, size_t> lightmapOfPrimitives(const tinygltf::Model& model, const std::vector<Mesh::Source>& meshes,
+                                                    const WrittenLayouts& written,
+                                                    const std::vector<ExportedLightmap>& lightmaps,
+                                                    const std::string& source, Diagnostics& diagnostics) {
+    std::map<PrimitiveKey, size_t> lightmapOf;
+    for (size_t a = 0; a < lightmaps.size(); ++a)
+        for (uint32_t m : lightmaps[a].meshes) {
+            if (m >= meshes.size()) throw Error("writeLightmappedGlb: mesh " + std::to_string(m) + " does not exist");
+            const Mesh::Source& from = meshes[m];
+            const int target = written.gltfMesh(from);
+            if (target < 0 || static_cast<size_t>(target) >= model.meshes.size() || from.primitive < 0 ||
+                static_cast<size_t>(from.primitive) >= model.meshes[size_t(target)].primitives.size())
+                continue;  // made in code, not read from the file
+            if (written.unlit.count({target, from.primitive})) continue;
+            const auto [it, added] = lightmapOf.emplace(PrimitiveKey(target, from.primitive), a);
+            if (!added && it->second != a)
+                diagnostics.warn(source + ": mesh " + std::to_string(from.mesh) + " primitive " +
+                                 std::to_string(from.primitive) + " is placed by nodes baked into lightmaps '" +
+                                 lightmaps[it->second].name + "' and '" + lightmaps[a].name +
+                                 "'; its instances share one material, which takes '" + lightmaps[it->second].name + "'");
+        }
+    return lightmapOf;
+}
+
+// Points every lightmapped primitive's material at its lightmap: the material itself when it
+// serves that lightmap alone, else a copy per lightmap (the unlit primitives keep the original).
+void attachLightmaps(tinygltf::Model& model, const std::map<PrimitiveKey, size_t>& lightmapOf,
+                     const std::vector<int>& textureOf, const std::vector<ExportedLightmap>& lightmaps) {
+    constexpr size_t kUnlit = static_cast<size_t>(-1);
+    std::map<int, std::set<size_t>> usesOf;  // material (−1: the default) → lightmaps, kUnlit
+    for (size_t m = 0; m < model.meshes.size(); ++m)
+        for (size_t p = 0; p < model.meshes[m].primitives.size(); ++p) {
+            const auto it = lightmapOf.find({int(m), int(p)});
+            usesOf[model.meshes[m].primitives[p].material].insert(it == lightmapOf.end() ? kUnlit : it->second);
+        }
+    std::map<std::pair<int, size_t>, int> materialFor;
+    for (const auto& [material, uses] : usesOf)
+        for (size_t a : uses) {
+            if (a == kUnlit) continue;
+            int target = material;
+            if (!(material >= 0 && uses.size() == 1)) {
+                tinygltf::Material copy = material >= 0 ? model.materials[size_t(material)] : tinygltf::Material();
+                copy.name = (material >= 0 ? copy.name : std::string("default")) + " (lightmap " + lightmaps[a].name + ")";
+                model.materials.push_back(copy);
+                target = static_cast<int>(model.materials.size()) - 1;
+            }
+            model.materials[size_t(target)].extensions[kLightmapExtension] =
+                lightmapExtension(textureOf[a], lightmaps[a].encoded.range);
+            materialFor[{material, a}] = target;
+        }
+    for (const auto& [key, a] : lightmapOf) {
+        tinygltf::Primitive& primitive = model.meshes[size_t(key.first)].primitives[size_t(key.second)];
+        primitive.material = materialFor.at({primitive.material, a});
+    }
+    if (!lightmaps.empty() &&
+        std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), kLightmapExtension) == model.extensionsUsed.end())
+        model.extensionsUsed.push_back(kLightmapExtension);
+}
+
 }  // namespace
 
 void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Source>& meshes,
@@ -188,133 +324,14 @@ void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Sour
 
     BinaryBuffer bin;
     packBuffers(model, encoded, bin, source, diagnostics);
+    const WrittenLayouts written = writeLayouts(model, bin, meshes, layouts, source, diagnostics);
+    const std::vector<int> textureOf = addLightmapTextures(model, bin, lightmaps);
+    attachLightmaps(model, lightmapOfPrimitives(model, meshes, written, lightmaps, source, diagnostics), textureOf,
+                    lightmaps);
 
-    // Generated layouts: each node's instance of a glTF mesh gets its own mesh (the first
-    // node keeps the original), whose primitives take the layout's vertices and TEXCOORD_1.
-    std::map<int, int> meshOfNode;  // node → the glTF mesh its instance writes to
-    std::set<std::pair<int, int>> unlit;  // (glTF mesh, primitive) left without a lightmap
-    {
-        const std::vector<tinygltf::Mesh> originals = model.meshes;
-        std::set<int> claimed;  // glTF meshes a node has taken
-        for (size_t k = 0; k < layouts.size(); ++k) {
-            const Mesh::Source& from = meshes[k];
-            if (layouts[k].uv1.empty() || from.node < 0 || static_cast<size_t>(from.node) >= model.nodes.size() ||
-                from.mesh < 0 || static_cast<size_t>(from.mesh) >= model.meshes.size())
-                continue;
-            if (!meshOfNode.count(from.node)) {
-                if (claimed.insert(from.mesh).second) {
-                    meshOfNode[from.node] = from.mesh;
-                } else {
-                    model.meshes.push_back(originals[size_t(from.mesh)]);
-                    meshOfNode[from.node] = static_cast<int>(model.meshes.size()) - 1;
-                    model.nodes[size_t(from.node)].mesh = meshOfNode[from.node];
-                }
-            }
-            const int target = meshOfNode[from.node];
-            if (from.primitive < 0 || static_cast<size_t>(from.primitive) >= originals[size_t(from.mesh)].primitives.size())
-                continue;
-            if (!writeLayout(model, bin, target, from.primitive, originals[size_t(from.mesh)].primitives[size_t(from.primitive)],
-                             layouts[k])) {
-                unlit.insert({target, from.primitive});
-                diagnostics.warn(source + ": mesh " + std::to_string(from.mesh) + " primitive " +
-                                 std::to_string(from.primitive) +
-                                 " has morph targets or sparse attributes, which glTF out does not rewrite: "
-                                 "scene.glb shows it without its lightmap");
-            }
-        }
-    }
-    const auto gltfMeshOf = [&](const Mesh::Source& from) {
-        const auto it = meshOfNode.find(from.node);
-        return it == meshOfNode.end() ? from.mesh : it->second;
-    };
-
-    // Each lightmap: its PNG, a linear clamped sampler (no mipmaps: averaging RGBM texels is
-    // not averaging light) and a texture.
-    tinygltf::Sampler sampler;
-    sampler.magFilter = kLinear;
-    sampler.minFilter = kLinear;
-    sampler.wrapS = kClampToEdge;
-    sampler.wrapT = kClampToEdge;
-    sampler.name = "lightmap";
-    model.samplers.push_back(sampler);
-    const int samplerIndex = static_cast<int>(model.samplers.size()) - 1;
-    std::vector<int> textureOf(lightmaps.size());
-    for (size_t a = 0; a < lightmaps.size(); ++a) {
-        const std::vector<uint8_t> png = rgbmPng(lightmaps[a].encoded);
-        tinygltf::Image image;
-        image.name = lightmaps[a].name;
-        image.mimeType = "image/png";
-        image.bufferView = bin.addView(model, png.data(), png.size());
-        model.images.push_back(image);
-        tinygltf::Texture texture;
-        texture.name = lightmaps[a].name;
-        texture.source = static_cast<int>(model.images.size()) - 1;
-        texture.sampler = samplerIndex;
-        model.textures.push_back(texture);
-        textureOf[a] = static_cast<int>(model.textures.size()) - 1;
-    }
-
-    // Which lightmap each glTF primitive was baked into.
-    std::map<std::pair<int, int>, size_t> atlasOf;
-    for (size_t a = 0; a < lightmaps.size(); ++a)
-        for (uint32_t m : lightmaps[a].meshes) {
-            if (m >= meshes.size()) throw Error("writeLightmappedGlb: mesh " + std::to_string(m) + " does not exist");
-            const Mesh::Source& from = meshes[m];
-            const int target = gltfMeshOf(from);
-            if (target < 0 || static_cast<size_t>(target) >= model.meshes.size() || from.primitive < 0 ||
-                static_cast<size_t>(from.primitive) >= model.meshes[size_t(target)].primitives.size())
-                continue;  // made in code, not read from the file
-            if (unlit.count({target, from.primitive})) continue;
-            const auto [it, added] = atlasOf.emplace(std::make_pair(target, from.primitive), a);
-            if (!added && it->second != a)
-                diagnostics.warn(source + ": mesh " + std::to_string(from.mesh) + " primitive " +
-                                 std::to_string(from.primitive) + " is placed by nodes baked into lightmaps '" +
-                                 lightmaps[it->second].name + "' and '" + lightmaps[a].name +
-                                 "'; its instances share one material, which takes '" + lightmaps[it->second].name + "'");
-        }
-
-    // Which lightmaps (or none: kUnlit) each material's primitives use.
-    constexpr size_t kUnlit = static_cast<size_t>(-1);
-    std::map<int, std::set<size_t>> usesOf;  // material (−1: the default) → lightmaps
-    for (size_t m = 0; m < model.meshes.size(); ++m)
-        for (size_t p = 0; p < model.meshes[m].primitives.size(); ++p) {
-            const auto it = atlasOf.find({int(m), int(p)});
-            usesOf[model.meshes[m].primitives[p].material].insert(it == atlasOf.end() ? kUnlit : it->second);
-        }
-    // The material each (material, lightmap) pair gets: the material itself when it serves
-    // that lightmap alone, else a copy.
-    std::map<std::pair<int, size_t>, int> materialFor;
-    for (const auto& [material, uses] : usesOf) {
-        for (size_t a : uses) {
-            if (a == kUnlit) continue;
-            const bool inPlace = material >= 0 && uses.size() == 1;
-            int target = material;
-            if (!inPlace) {
-                tinygltf::Material copy = material >= 0 ? model.materials[size_t(material)] : tinygltf::Material();
-                copy.name = (material >= 0 ? copy.name : std::string("default")) + " (lightmap " + lightmaps[a].name + ")";
-                model.materials.push_back(copy);
-                target = static_cast<int>(model.materials.size()) - 1;
-            }
-            model.materials[size_t(target)].extensions[kLightmapExtension] =
-                lightmapExtension(textureOf[a], lightmaps[a].encoded.range);
-            materialFor[{material, a}] = target;
-        }
-    }
-    for (size_t m = 0; m < model.meshes.size(); ++m)
-        for (size_t p = 0; p < model.meshes[m].primitives.size(); ++p) {
-            const auto it = atlasOf.find({int(m), int(p)});
-            if (it == atlasOf.end()) continue;
-            tinygltf::Primitive& primitive = model.meshes[m].primitives[p];
-            primitive.material = materialFor.at({primitive.material, it->second});
-        }
-
-    if (!lightmaps.empty() &&
-        std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), kLightmapExtension) == model.extensionsUsed.end())
-        model.extensionsUsed.push_back(kLightmapExtension);
     model.asset.generator = std::string("voxlight ") + VOXLIGHT_VERSION;
     model.buffers.assign(1, tinygltf::Buffer());
     model.buffers[0].data = std::move(bin.data());
-
     writeAtomically(path, [&](const std::string& temp) {
         tinygltf::TinyGLTF writer;
         if (!writer.WriteGltfSceneToFile(&model, temp, false, true, false, true))

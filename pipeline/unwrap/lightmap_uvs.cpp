@@ -28,6 +28,17 @@ struct Chart {
     glm::ivec2 size{0};    // rectangle in texels, padding included, after `turned`
 };
 
+// A point, and triangle t of `mesh`, on a chart's plane.
+vec2 onChart(const Chart& chart, const vec3& p) { return vec2(glm::dot(p, chart.axisU), glm::dot(p, chart.axisV)); }
+
+void chartTriangle(const Mesh& mesh, const Chart& chart, uint32_t t, vec2 (&p)[3]) {
+    for (int k = 0; k < 3; ++k) p[k] = onChart(chart, mesh.positions[mesh.indices[3 * size_t(t) + size_t(k)]]);
+}
+
+double area2d(const vec2 (&p)[3]) {
+    return 0.5 * std::abs(double(p[1].x - p[0].x) * (p[2].y - p[0].y) - double(p[1].y - p[0].y) * (p[2].x - p[0].x));
+}
+
 uint64_t edgeKey(uint32_t a, uint32_t b) {
     if (a > b) std::swap(a, b);
     return (uint64_t(a) << 32) | b;
@@ -99,12 +110,6 @@ std::vector<Chart> meshCharts(const Mesh& mesh, uint32_t meshIndex) {
     const float slack = 1e-5f * cell;
     std::unordered_map<uint64_t, std::vector<uint32_t>> grid;  // the current chart's triangles by cell
     const auto cellKey = [](int x, int y) { return (uint64_t(uint32_t(x)) << 32) | uint32_t(y); };
-    const auto flat = [&](uint32_t t, const Chart& chart, vec2 (&p)[3]) {
-        for (int k = 0; k < 3; ++k) {
-            const vec3& q = mesh.positions[mesh.indices[3 * size_t(t) + size_t(k)]];
-            p[k] = vec2(glm::dot(q, chart.axisU), glm::dot(q, chart.axisV));
-        }
-    };
     const auto cells = [&](const vec2 (&p)[3], auto&& visit) {
         const vec2 lo = glm::min(p[0], glm::min(p[1], p[2])) / cell, hi = glm::max(p[0], glm::max(p[1], p[2])) / cell;
         for (int y = int(std::floor(lo.y)); y <= int(std::floor(hi.y)); ++y)
@@ -113,7 +118,7 @@ std::vector<Chart> meshCharts(const Mesh& mesh, uint32_t meshIndex) {
     const auto overlapsChart = [&](uint32_t t, const Chart& chart) {
         if (!(area[t] > 0.0f)) return false;
         vec2 p[3];
-        flat(t, chart, p);
+        chartTriangle(mesh, chart, t, p);
         bool overlaps = false;
         cells(p, [&](uint64_t key) {
             if (overlaps) return;
@@ -121,7 +126,7 @@ std::vector<Chart> meshCharts(const Mesh& mesh, uint32_t meshIndex) {
             if (it == grid.end()) return;
             for (uint32_t other : it->second) {
                 vec2 o[3];
-                flat(other, chart, o);
+                chartTriangle(mesh, chart, other, o);
                 if (overlapIn2d(p, o, slack)) {
                     overlaps = true;
                     return;
@@ -133,7 +138,7 @@ std::vector<Chart> meshCharts(const Mesh& mesh, uint32_t meshIndex) {
     const auto hold = [&](uint32_t t, const Chart& chart) {
         if (!(area[t] > 0.0f)) return;
         vec2 p[3];
-        flat(t, chart, p);
+        chartTriangle(mesh, chart, t, p);
         cells(p, [&](uint64_t key) { grid[key].push_back(t); });
     };
     for (uint32_t seed : order) {
@@ -194,11 +199,10 @@ std::vector<vec2> convexHull(std::vector<vec2> points) {
 // 1975), and measures it. A principal-axes turn put a square wall at 45° (its corners'
 // spread is the same along every axis) and doubled its rectangle.
 void measureChart(const Mesh& mesh, Chart& chart) {
-    const auto project = [&](const vec3& p) { return vec2(glm::dot(p, chart.axisU), glm::dot(p, chart.axisV)); };
     std::vector<vec2> corners;
     corners.reserve(3 * chart.triangles.size());
     for (uint32_t t : chart.triangles)
-        for (int k = 0; k < 3; ++k) corners.push_back(project(mesh.positions[mesh.indices[3 * size_t(t) + size_t(k)]]));
+        for (int k = 0; k < 3; ++k) corners.push_back(onChart(chart, mesh.positions[mesh.indices[3 * size_t(t) + size_t(k)]]));
     const std::vector<vec2> hull = convexHull(std::move(corners));
     float angle = 0.0f;
     double best = std::numeric_limits<double>::max();
@@ -228,15 +232,12 @@ void measureChart(const Mesh& mesh, Chart& chart) {
     chart.upper = vec2(-std::numeric_limits<float>::max());
     for (uint32_t t : chart.triangles) {
         vec2 p[3];
-        vec3 q[3];
-        for (int k = 0; k < 3; ++k) {
-            q[k] = mesh.positions[mesh.indices[3 * size_t(t) + size_t(k)]];
-            p[k] = project(q[k]);
-            chart.lower = glm::min(chart.lower, p[k]);
-            chart.upper = glm::max(chart.upper, p[k]);
+        chartTriangle(mesh, chart, t, p);
+        for (const vec2& corner : p) {
+            chart.lower = glm::min(chart.lower, corner);
+            chart.upper = glm::max(chart.upper, corner);
         }
-        chart.projectedArea +=
-            0.5 * std::abs(double(p[1].x - p[0].x) * (p[2].y - p[0].y) - double(p[1].y - p[0].y) * (p[2].x - p[0].x));
+        chart.projectedArea += area2d(p);
     }
 }
 
@@ -274,22 +275,17 @@ bool pack(std::vector<Chart>& charts, const std::vector<uint32_t>& order, double
         }
         if (bestIndex == skyline.size()) return false;
         chart.origin = glm::ivec2(bestX, bestY);
-        // The new segment replaces what it covers; a segment it covers in part keeps the rest.
+        // The new segment replaces what it covers: the skyline left of it, the new one, the
+        // skyline right of it (a segment it covers in part keeps the rest).
         std::vector<Segment> next;
         next.reserve(skyline.size() + 2);
-        for (size_t i = 0; i < skyline.size(); ++i) {
-            const Segment& g = skyline[i];
-            const int end = g.x + g.width;
-            if (end <= bestX || g.x >= bestX + w) {
-                if (g.x >= bestX + w && (next.empty() || next.back().x + next.back().width <= bestX)) next.push_back({bestX, bestTop, w});
-                next.push_back(g);
-                continue;
-            }
-            if (g.x < bestX) next.push_back({g.x, g.y, bestX - g.x});
-            if (next.empty() || next.back().x + next.back().width <= bestX) next.push_back({bestX, bestTop, w});
-            if (end > bestX + w) next.push_back({bestX + w, g.y, end - (bestX + w)});
+        for (const Segment& g : skyline)
+            if (g.x < bestX) next.push_back({g.x, g.y, std::min(g.x + g.width, bestX) - g.x});
+        next.push_back({bestX, bestTop, w});
+        for (const Segment& g : skyline) {
+            const int from = std::max(g.x, bestX + w), end = g.x + g.width;
+            if (end > from) next.push_back({from, g.y, end - from});
         }
-        if (next.empty() || next.back().x + next.back().width <= bestX) next.push_back({bestX, bestTop, w});
         // Neighbours at one height become one segment.
         skyline.clear();
         for (const Segment& g : next) {
@@ -300,6 +296,29 @@ bool pack(std::vector<Chart>& charts, const std::vector<uint32_t>& order, double
         }
     }
     return true;
+}
+
+// Stretch: a triangle's area over its projected area, the largest over triangles of at least
+// a hundredth of a texel (a sliver's projection is all rounding), the mean area-weighted over
+// all; s the texel size.
+void measureStretch(const Scene& scene, const std::vector<Chart>& charts, double s, LightmapUvReport& report) {
+    double stretchSum = 0.0, areaSum = 0.0;
+    for (const Chart& chart : charts) {
+        const Mesh& mesh = scene.meshes[chart.mesh];
+        for (uint32_t t : chart.triangles) {
+            vec2 p[3];
+            chartTriangle(mesh, chart, t, p);
+            const double flat = area2d(p);
+            const uint32_t* i = &mesh.indices[3 * size_t(t)];
+            const double area3 = 0.5 * double(glm::length(glm::cross(mesh.positions[i[1]] - mesh.positions[i[0]],
+                                                                     mesh.positions[i[2]] - mesh.positions[i[0]])));
+            if (!(flat > 0.0)) continue;
+            stretchSum += area3 / flat * area3;
+            areaSum += area3;
+            if (area3 >= 0.01 * s * s) report.maxStretch = std::max(report.maxStretch, area3 / flat);
+        }
+    }
+    report.meanStretch = areaSum > 0.0 ? stretchSum / areaSum : 1.0;
 }
 
 }  // namespace
@@ -363,29 +382,7 @@ LightmapUvReport generateLightmapUvs(Scene& scene, int width, int height) {
     report.texelSize = s;
     report.charts = charts.size();
     report.occupancy = projected / (s * s) / (double(width) * double(height));
-    // Stretch: a triangle's area over its projected area, the largest over triangles of at
-    // least a hundredth of a texel (a sliver's projection is all rounding), the mean
-    // area-weighted over all.
-    double stretchSum = 0.0, areaSum = 0.0;
-    for (const Chart& chart : charts) {
-        const Mesh& mesh = scene.meshes[chart.mesh];
-        for (uint32_t t : chart.triangles) {
-            vec3 q[3];
-            vec2 p[3];
-            for (int k = 0; k < 3; ++k) {
-                q[k] = mesh.positions[mesh.indices[3 * size_t(t) + size_t(k)]];
-                p[k] = vec2(glm::dot(q[k], chart.axisU), glm::dot(q[k], chart.axisV));
-            }
-            const double flat =
-                0.5 * std::abs(double(p[1].x - p[0].x) * (p[2].y - p[0].y) - double(p[1].y - p[0].y) * (p[2].x - p[0].x));
-            const double area3 = 0.5 * double(glm::length(glm::cross(q[1] - q[0], q[2] - q[0])));
-            if (!(flat > 0.0)) continue;
-            stretchSum += area3 / flat * area3;
-            areaSum += area3;
-            if (area3 >= 0.01 * s * s) report.maxStretch = std::max(report.maxStretch, area3 / flat);
-        }
-    }
-    report.meanStretch = areaSum > 0.0 ? stretchSum / areaSum : 1.0;
+    measureStretch(scene, charts, s, report);
 
     // New vertices: one per (vertex, chart) pair, every attribute copied, uv1 in the chart.
     std::vector<std::vector<uint32_t>> chartsOf(scene.meshes.size());
