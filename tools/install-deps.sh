@@ -6,7 +6,8 @@ packages=(build-essential cmake ninja-build
   libglm-dev libtbb-dev catch2 libcli11-dev nlohmann-json3-dev
   python3-openvdb libbenchmark-dev libembree-dev
   gnuplot-nox  # voxlight bench draws its plot with gnuplot; the optional Cycles peer needs blender
-  nodejs)  # runs the Khronos glTF validator (tools/gltf-validator) on every scene.glb in the tests
+  nodejs  # runs the Khronos glTF validator (tools/gltf-validator) on every scene.glb in the tests
+  chromium)  # voxlight view --screenshot, and the test of the viewer page in a real browser
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

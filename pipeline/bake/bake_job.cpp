@@ -172,7 +172,8 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
             std::vector<ExportedLightmap> lightmaps;
             for (const BakedLightmap& lightmap : result.lightmaps)
                 lightmaps.push_back({lightmap.name, lightmap.meshes, encodeRgbm(lightmap.total)});
-            writeLightmappedGlb(sourcePath, meshSources, result.generatedLayouts, lightmaps, p, diagnostics);
+            writeLightmappedGlb(sourcePath, meshSources, result.generatedLayouts, lightmaps, job.addedCameras, p,
+                                diagnostics);
         });
     files.writeAll();
     report.stages.push_back({"write", std::chrono::duration<double>(std::chrono::steady_clock::now() - writeStart).count()});

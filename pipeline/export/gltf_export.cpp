@@ -5,6 +5,8 @@
 #include "scene/gltf_accessor.h"
 #include "scene/gltf_model.h"
 
+#include <glm/gtc/quaternion.hpp>
+
 #include <algorithm>
 #include <cstring>
 #include <limits>
@@ -310,11 +312,44 @@ void attachLightmaps(tinygltf::Model& model, const std::map<PrimitiveKey, size_t
         model.extensionsUsed.push_back(kLightmapExtension);
 }
 
+// tinygltf writes `zfar` always, and 0 (its "infinite projection") is invalid glTF: a camera
+// without a far plane gets one far beyond any scene (10^7 × znear: 100 km at 1 cm).
+void giveFarPlanes(tinygltf::Model& model) {
+    for (tinygltf::Camera& camera : model.cameras)
+        if (camera.type == "perspective" && !(camera.perspective.zfar > camera.perspective.znear))
+            camera.perspective.zfar = camera.perspective.znear * 1e7;
+}
+
+// A glTF camera looks down its node's −Z with +Y up.
+void addCameras(tinygltf::Model& model, const std::vector<Camera>& cameras) {
+    if (cameras.empty()) return;
+    if (model.scenes.empty()) model.scenes.emplace_back();
+    tinygltf::Scene& scene = model.scenes[size_t(std::max(model.defaultScene, 0))];
+    for (const Camera& camera : cameras) {
+        tinygltf::Camera written;
+        written.name = camera.name;
+        written.type = "perspective";
+        written.perspective.yfov = camera.yfov;
+        written.perspective.aspectRatio = camera.aspectRatio;  // 0: not written (the viewport's)
+        written.perspective.znear = 0.01;
+        model.cameras.push_back(written);
+        tinygltf::Node node;
+        node.name = camera.name;
+        node.camera = static_cast<int>(model.cameras.size() - 1);
+        const vec3 right = glm::normalize(glm::cross(camera.forward, camera.up));
+        const glm::quat rotation = glm::quat_cast(glm::mat3(right, glm::cross(right, camera.forward), -camera.forward));
+        node.rotation = {rotation.x, rotation.y, rotation.z, rotation.w};
+        node.translation = {camera.position.x, camera.position.y, camera.position.z};
+        model.nodes.push_back(node);
+        scene.nodes.push_back(static_cast<int>(model.nodes.size() - 1));
+    }
+}
+
 }  // namespace
 
 void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Source>& meshes,
                          const std::vector<GeneratedLayout>& layouts, const std::vector<ExportedLightmap>& lightmaps,
-                         const std::string& path, Diagnostics& diagnostics) {
+                         const std::vector<Camera>& addedCameras, const std::string& path, Diagnostics& diagnostics) {
     if (!layouts.empty() && layouts.size() != meshes.size())
         throw Error("writeLightmappedGlb: " + std::to_string(layouts.size()) + " layouts for " +
                     std::to_string(meshes.size()) + " meshes");
@@ -328,6 +363,9 @@ void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Sour
     const std::vector<int> textureOf = addLightmapTextures(model, bin, lightmaps);
     attachLightmaps(model, lightmapOfPrimitives(model, meshes, written, lightmaps, source, diagnostics), textureOf,
                     lightmaps);
+
+    addCameras(model, addedCameras);
+    giveFarPlanes(model);
 
     model.asset.generator = std::string("voxlight ") + VOXLIGHT_VERSION;
     model.buffers.assign(1, tinygltf::Buffer());

@@ -43,8 +43,10 @@ struct ExportedLightmap {
 // node, since each instance has charts of its own. A primitive with morph targets or sparse
 // attributes keeps its own vertices and no lightmap (a warning). InputError naming the file
 // when the source no longer reads; Error naming `path` when it cannot be written.
+// `addedCameras` (a job file's, in world space) become camera nodes at the scene's root, so a
+// viewer can show the bake's images' views.
 void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Source>& meshes,
                          const std::vector<GeneratedLayout>& layouts, const std::vector<ExportedLightmap>& lightmaps,
-                         const std::string& path, Diagnostics& diagnostics);
+                         const std::vector<Camera>& addedCameras, const std::string& path, Diagnostics& diagnostics);
 
 }  // namespace vl

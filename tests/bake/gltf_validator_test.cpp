@@ -4,6 +4,7 @@
 // geometry and texture lie in files beside it (Khronos' BoxTextured).
 #include "bake/bake_job.h"
 #include "bake/job_file.h"
+#include "scene/gltf_loader.h"
 #include "support/paths.h"
 
 #include <catch2/catch.hpp>
@@ -68,4 +69,15 @@ TEST_CASE("Every scene.glb the bake writes passes the Khronos glTF validator wit
         CHECK(status == 0);
         CHECK_THAT(output, Catch::Contains(": 0 errors"));
     }
+    // The zdm2 job adds a camera (its image's view): scene.glb carries it as a glTF camera
+    // where the job put it, looking at the job's target, so a viewer can show that view.
+    const Scene zdm2 = loadGltf(jobs[0].outputDir + "/scene.glb");
+    REQUIRE(zdm2.cameras.size() == 1);
+    const Camera& start = zdm2.cameras[0];
+    CHECK(start.name == "start");
+    const vec3 position = vec3(zdm2.origin) + start.position;
+    CHECK(glm::length(position - vec3(11.80f, 1.50f, 7.54f)) < 1e-4f);
+    const vec3 toTarget = glm::normalize(vec3(11.95f, -1.33f, -7.53f) - vec3(11.80f, 1.50f, 7.54f));
+    CHECK(glm::dot(start.forward, toTarget) > 1.0f - 1e-6f);
+    CHECK(start.yfov == Approx(1.0f));
 }

@@ -43,7 +43,7 @@ TEST_CASE("glTF out holds the scene's buffers and images in one .glb and points 
     CHECK(sources[0].primitive == 0);
     const std::string out = test::tempDir("gltf-out") + "/box.glb";
     Diagnostics diagnostics(false, false);
-    writeLightmappedGlb(source, sources, {}, {grey("lightmap", {0}, 3.0f)}, out, diagnostics);
+    writeLightmappedGlb(source, sources, {}, {grey("lightmap", {0}, 3.0f)}, {}, out, diagnostics);
     CHECK(diagnostics.warnings().empty());
 
     const tinygltf::Model after = reread(out);
@@ -98,7 +98,8 @@ TEST_CASE("glTF out copies a material that serves several lightmaps or unlit pri
     const std::string out = test::tempDir("gltf-out") + "/quad.glb";
     Diagnostics diagnostics(false, false);
     // users[0] in lightmap A, users[1] in lightmap B, any further users unbaked.
-    writeLightmappedGlb(source, sources, {}, {grey("A", {users[0]}, 0.5f), grey("B", {users[1]}, 0.5f)}, out, diagnostics);
+    writeLightmappedGlb(source, sources, {}, {grey("A", {users[0]}, 0.5f), grey("B", {users[1]}, 0.5f)}, {}, out,
+                        diagnostics);
     const tinygltf::Model after = reread(out);
     const auto materialOf = [&](uint32_t sceneMesh) {
         const Mesh::Source& s = scene.meshes[sceneMesh].source;

@@ -13,6 +13,7 @@ void addReferenceCommand(CLI::App& app);
 void addLightCommand(CLI::App& app);
 void addBakeCommand(CLI::App& app);
 void addBenchCommand(CLI::App& app);
+void addViewCommand(CLI::App& app);
 
 // The project's default scene (scenes/cornell_box.gltf in the source tree).
 std::string defaultScenePath();

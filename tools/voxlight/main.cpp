@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
     vl::cli::addLightCommand(app);
     vl::cli::addBakeCommand(app);
     vl::cli::addBenchCommand(app);
+    vl::cli::addViewCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -1,0 +1,425 @@
+// The viewer page of `voxlight view`: a bake's scene.glb shown with its lightmaps.
+//
+// Every surface is drawn as the bake sees it: outgoing radiance = albedo × lightmap (the
+// lightmap holds E/π, the README's convention) + emission, with no lights of three.js' own,
+// then exposure and the sRGB curve, clamped, exactly as the bake writes image.png. The
+// lightmap (MOZ_lightmap: RGBM in an 8-bit PNG, `intensity` its range) is decoded texel by
+// texel and only then filtered bilinearly, so the page shows the EXR's values between texels,
+// not a blend of encoded ones.
+//
+// ?capture (with scene, camera, mode, exposure, width, height) renders one frame at that size
+// from that glTF camera and POSTs the canvas as PNG to /capture: `voxlight view --screenshot`
+// and the browser test use it. ?capture=page runs the page as usual and POSTs /ready once it
+// has drawn, for the browser's own screenshot of it (`--screenshot --whole-page`).
+// ?material=three draws with three.js' materials instead (moz_lightmap.js, for one's own scene).
+import * as THREE from 'three';
+import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { PointerLockControls } from 'three/addons/controls/PointerLockControls.js';
+import { VRButton } from 'three/addons/webxr/VRButton.js';
+import { applyMozLightmaps } from './moz_lightmap.js';
+
+const params = new URLSearchParams(location.search);
+const capturing = params.get('capture') === '';         // the canvas alone, posted to /capture
+const capturingPage = params.get('capture') === 'page';  // the whole page: /ready once drawn
+const MODES = { lit: 0, lightmap: 1, albedo: 2 };
+const UNLIT_LEVEL = 0.1;  // what a surface the bake did not light shows: albedo × this, in lit mode
+
+const report = window.voxlightReport;  // index.html's, which also sees a module that fails to load
+
+// ---- the surface shader -------------------------------------------------------------------
+
+const vertexShader = /* glsl */ `
+precision highp float;
+uniform mat4 modelViewMatrix;
+uniform mat4 projectionMatrix;
+uniform mat3 baseMapTransform;
+uniform mat3 emissiveMapTransform;
+in vec3 position;
+#ifdef USE_INSTANCING
+in mat4 instanceMatrix;
+#endif
+#ifdef HAS_UV0
+in vec2 uv;
+#endif
+#ifdef HAS_UV1
+in vec2 uv1;
+#endif
+#ifdef HAS_COLOR
+in COLOR_TYPE color;
+out vec4 vColor;
+#endif
+out vec2 vBaseUv;
+out vec2 vEmissiveUv;
+out vec2 vLightmapUv;
+
+vec2 channel(int which) {
+  vec2 t = vec2(0.0);
+#ifdef HAS_UV0
+  if (which == 0) t = uv;
+#endif
+#ifdef HAS_UV1
+  if (which == 1) t = uv1;
+#endif
+  return t;
+}
+
+void main() {
+  vBaseUv = (baseMapTransform * vec3(channel(BASE_CHANNEL), 1.0)).xy;
+  vEmissiveUv = (emissiveMapTransform * vec3(channel(EMISSIVE_CHANNEL), 1.0)).xy;
+  vLightmapUv = channel(LIGHTMAP_CHANNEL);
+#ifdef HAS_COLOR
+  vColor = vec4(1.0);
+  vColor.COLOR_SWIZZLE = color;
+#endif
+  vec4 p = vec4(position, 1.0);
+#ifdef USE_INSTANCING
+  p = instanceMatrix * p;
+#endif
+  gl_Position = projectionMatrix * modelViewMatrix * p;
+}
+`;
+
+const fragmentShader = /* glsl */ `
+precision highp float;
+precision highp int;
+uniform vec4 baseColorFactor;
+uniform sampler2D baseColorMap;
+uniform vec3 emissiveFactor;
+uniform sampler2D emissiveMap;
+uniform sampler2D lightMap;
+uniform float lightMapRange;
+uniform float alphaCutoff;
+uniform int mode;
+uniform float exposure;
+in vec2 vBaseUv;
+in vec2 vEmissiveUv;
+in vec2 vLightmapUv;
+#ifdef HAS_COLOR
+in vec4 vColor;
+#endif
+out vec4 fragColor;
+
+vec3 lightmapTexel(ivec2 p, ivec2 size) {
+  vec4 t = texelFetch(lightMap, clamp(p, ivec2(0), size - 1), 0);
+  return t.rgb * t.a * lightMapRange;
+}
+
+// Bilinear between decoded texels, texel centres at (i + 0.5) / size as the bake samples them.
+vec3 lightmapAt(vec2 uv) {
+  ivec2 size = textureSize(lightMap, 0);
+  vec2 p = uv * vec2(size) - 0.5;
+  vec2 cell = floor(p);
+  vec2 f = p - cell;
+  ivec2 i = ivec2(cell);
+  vec3 bottom = mix(lightmapTexel(i, size), lightmapTexel(i + ivec2(1, 0), size), f.x);
+  vec3 top = mix(lightmapTexel(i + ivec2(0, 1), size), lightmapTexel(i + ivec2(1, 1), size), f.x);
+  return mix(bottom, top, f.y);
+}
+
+vec3 toSrgb(vec3 c) {
+  c = clamp(c, 0.0, 1.0);
+  return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(vec3(0.0031308), c));
+}
+
+void main() {
+  vec4 albedo = baseColorFactor;
+#ifdef HAS_BASE_MAP
+  albedo *= texture(baseColorMap, vBaseUv);  // an sRGB texture: sampled in linear light
+#endif
+#ifdef HAS_COLOR
+  albedo *= vColor;
+#endif
+#ifdef ALPHA_MASK
+  if (albedo.a < alphaCutoff) discard;
+#endif
+  vec3 emission = emissiveFactor;
+#ifdef HAS_EMISSIVE_MAP
+  emission *= texture(emissiveMap, vEmissiveUv).rgb;
+#endif
+#ifdef HAS_LIGHTMAP
+  vec3 light = lightmapAt(vLightmapUv);
+#else
+  vec3 light = vec3(${UNLIT_LEVEL.toFixed(3)});
+#endif
+  vec3 radiance = mode == 0 ? albedo.rgb * light + emission : mode == 1 ? light : albedo.rgb;
+#ifdef ALPHA_BLEND
+  float alpha = albedo.a;
+#else
+  float alpha = 1.0;
+#endif
+  fragColor = vec4(toSrgb(radiance * exposure), alpha);
+}
+`;
+
+const identity3 = new THREE.Matrix3();
+
+function textureMatrix(texture) {
+  if (!texture) return identity3;
+  texture.updateMatrix();
+  return texture.matrix;
+}
+
+// One material per (glTF material, attributes the geometry has): the shader reads only what exists.
+function bakedMaterial(source, geometry, lightmap, shared, instanced) {
+  const color = geometry.getAttribute('color');
+  const defines = {
+    BASE_CHANNEL: source.map ? source.map.channel : 0,
+    EMISSIVE_CHANNEL: source.emissiveMap ? source.emissiveMap.channel : 0,
+    LIGHTMAP_CHANNEL: lightmap ? lightmap.channel : 1,
+  };
+  if (geometry.getAttribute('uv')) defines.HAS_UV0 = '';
+  if (geometry.getAttribute('uv1')) defines.HAS_UV1 = '';
+  if (source.vertexColors && color) {
+    defines.HAS_COLOR = '';
+    defines.COLOR_TYPE = color.itemSize === 4 ? 'vec4' : 'vec3';
+    defines.COLOR_SWIZZLE = color.itemSize === 4 ? 'rgba' : 'rgb';
+  }
+  if (source.map) defines.HAS_BASE_MAP = '';
+  if (source.emissiveMap) defines.HAS_EMISSIVE_MAP = '';
+  if (lightmap) defines.HAS_LIGHTMAP = '';
+  if (source.alphaTest > 0) defines.ALPHA_MASK = '';
+  if (source.transparent) defines.ALPHA_BLEND = '';
+  if (instanced) defines.USE_INSTANCING = '';
+  const emissive = source.emissive ? source.emissive.clone().multiplyScalar(source.emissiveIntensity ?? 1) : new THREE.Color(0, 0, 0);
+  return new THREE.RawShaderMaterial({
+    name: source.name,
+    glslVersion: THREE.GLSL3,
+    vertexShader,
+    fragmentShader,
+    defines,
+    side: source.side,
+    transparent: source.transparent,
+    depthWrite: source.depthWrite,
+    uniforms: {
+      baseColorFactor: { value: new THREE.Vector4(source.color.r, source.color.g, source.color.b, source.opacity) },
+      baseColorMap: { value: source.map || null },
+      baseMapTransform: { value: textureMatrix(source.map) },
+      emissiveFactor: { value: emissive },
+      emissiveMap: { value: source.emissiveMap || null },
+      emissiveMapTransform: { value: textureMatrix(source.emissiveMap) },
+      lightMap: { value: lightmap ? lightmap.texture : null },
+      lightMapRange: { value: lightmap ? lightmap.range : 0 },
+      alphaCutoff: { value: source.alphaTest },
+      mode: shared.mode,
+      exposure: shared.exposure,
+    },
+  });
+}
+
+// MOZ_lightmap of the glTF material behind a three.js material: its texture, decoded as data.
+async function lightmapOf(parser, material, cache) {
+  const association = parser.associations.get(material);
+  if (!association || association.materials === undefined) return null;
+  const definition = parser.json.materials[association.materials];
+  const extension = definition.extensions && definition.extensions.MOZ_lightmap;
+  if (!extension) return null;
+  if (!cache.has(extension.index)) {
+    cache.set(extension.index, parser.getDependency('texture', extension.index).then((texture) => {
+      const data = texture.clone();  // the same image may serve as a colour map elsewhere
+      data.colorSpace = THREE.NoColorSpace;
+      data.flipY = false;
+      data.generateMipmaps = false;
+      data.minFilter = data.magFilter = THREE.NearestFilter;  // filtered in the shader, after decoding
+      data.needsUpdate = true;
+      return data;
+    }));
+  }
+  const texture = await cache.get(extension.index);
+  return { texture, range: extension.intensity ?? 1, channel: extension.texCoord ?? 0 };
+}
+
+async function applyBakedMaterials(gltf, shared) {
+  const meshes = [];
+  gltf.scene.traverse((object) => { if (object.isMesh) meshes.push(object); });
+  const textures = new Map();
+  const made = new Map();
+  let unlit = 0;
+  for (const mesh of meshes) {
+    const sources = Array.isArray(mesh.material) ? mesh.material : [mesh.material];
+    const replaced = [];
+    for (const source of sources) {
+      const lightmap = await lightmapOf(gltf.parser, source, textures);
+      const emits = source.emissive && source.emissive.r + source.emissive.g + source.emissive.b > 0;
+      if (!lightmap && !emits) ++unlit;  // an emitter shows its emission, lightmap or not
+      const geometry = mesh.geometry;
+      const key = [source.uuid, !!geometry.getAttribute('uv'), !!geometry.getAttribute('uv1'),
+                   geometry.getAttribute('color') ? geometry.getAttribute('color').itemSize : 0, !!mesh.isInstancedMesh].join();
+      if (!made.has(key)) made.set(key, bakedMaterial(source, geometry, lightmap, shared, !!mesh.isInstancedMesh));
+      replaced.push(made.get(key));
+    }
+    mesh.material = Array.isArray(mesh.material) ? replaced : replaced[0];
+  }
+  return { meshes: meshes.length, unlit };
+}
+
+// ---- cameras ------------------------------------------------------------------------------
+
+function glTFCameras(gltf) {
+  gltf.scene.updateMatrixWorld(true);
+  return gltf.cameras.map((camera, i) => ({ name: camera.name || `camera ${i}`, camera }));
+}
+
+// Puts the view camera where a glTF camera is, with its vertical field of view.
+function jumpTo(view, source, aspect) {
+  source.updateMatrixWorld(true);
+  source.matrixWorld.decompose(view.position, view.quaternion, new THREE.Vector3());
+  if (source.isPerspectiveCamera) view.fov = source.fov;
+  view.aspect = aspect;
+  view.updateProjectionMatrix();
+}
+
+function frameBox(view, box, aspect) {
+  const size = box.getSize(new THREE.Vector3());
+  const centre = box.getCenter(new THREE.Vector3());
+  const radius = Math.max(size.length() / 2, 1e-6);
+  view.fov = 50;
+  view.aspect = aspect;
+  view.position.copy(centre).add(new THREE.Vector3(0.6, 0.5, 1).normalize().multiplyScalar(radius * 2.2));
+  view.lookAt(centre);
+  view.updateProjectionMatrix();
+}
+
+// ---- the page -----------------------------------------------------------------------------
+
+async function fetchJson(url) {
+  const response = await fetch(url);
+  if (!response.ok) throw new Error(`${url}: ${response.status} ${response.statusText}`);
+  return response.json();
+}
+
+function sceneUrl(scene, file) {
+  return './scene/' + (scene ? scene.split('/').map(encodeURIComponent).join('/') + '/' : '') + file;
+}
+
+async function main() {
+  if (capturing) document.body.classList.add('capture');
+  const { scenes } = await fetchJson('./scenes.json');
+  const scene = params.get('scene') ?? scenes[0];
+  if (!scenes.includes(scene)) throw new Error(`no scene "${scene}" here; there are: ${scenes.join(', ')}`);
+
+  const width = capturing ? Number(params.get('width')) : window.innerWidth;
+  const height = capturing ? Number(params.get('height')) : window.innerHeight;
+  const renderer = new THREE.WebGLRenderer({ antialias: !capturing, preserveDrawingBuffer: capturing });
+  renderer.setPixelRatio(capturing ? 1 : window.devicePixelRatio);
+  renderer.setSize(width, height);
+  renderer.outputColorSpace = THREE.LinearSRGBColorSpace;  // the shader writes sRGB itself
+  renderer.toneMapping = THREE.NoToneMapping;
+  renderer.setClearColor(0x000000);
+  document.body.appendChild(renderer.domElement);
+
+  const shared = {
+    mode: { value: MODES[params.get('mode') ?? 'lit'] ?? 0 },
+    exposure: { value: Math.pow(2, Number(params.get('exposure') ?? 0)) },
+  };
+  const gltf = await new GLTFLoader().loadAsync(sceneUrl(scene, 'scene.glb'));
+  // ?material=three: three.js' own materials through moz_lightmap.js, the README's recipe (the
+  // show and exposure controls do not apply to them).
+  const threeMaterials = params.get('material') === 'three';
+  if (threeMaterials) renderer.outputColorSpace = THREE.SRGBColorSpace;
+  const counts = threeMaterials ? { meshes: await applyMozLightmaps(gltf), unlit: 0 } : await applyBakedMaterials(gltf, shared);
+  const world = gltf.scene;
+  const cameras = glTFCameras(gltf);
+  const box = new THREE.Box3().setFromObject(world);
+  const size = box.getSize(new THREE.Vector3()).length() || 1;
+
+  const view = new THREE.PerspectiveCamera(50, width / height, size * 1e-4, size * 20);
+  const chosen = Number(params.get('camera') ?? 0);
+  if (cameras[chosen]) jumpTo(view, cameras[chosen].camera, width / height);
+  else frameBox(view, box, width / height);
+
+  if (capturing) {
+    if (chosen >= 0 && params.has('camera') && !cameras[chosen]) throw new Error(`the scene has no camera ${chosen} (it has ${cameras.length})`);
+    renderer.render(world, view);
+    const blob = await new Promise((resolve) => renderer.domElement.toBlob(resolve, 'image/png'));
+    await fetch('/capture', { method: 'POST', body: blob });
+    return;
+  }
+
+  // Scenes, cameras, modes, exposure.
+  const sceneSelect = document.getElementById('scene');
+  for (const name of scenes) sceneSelect.add(new Option(name || '(this folder)', name, false, name === scene));
+  sceneSelect.onchange = () => { params.set('scene', sceneSelect.value); params.delete('camera'); location.search = params; };
+  const cameraSelect = document.getElementById('camera');
+  cameraSelect.add(new Option('whole scene', '-1', false, !cameras[chosen]));
+  cameras.forEach((c, i) => cameraSelect.add(new Option(c.name, String(i), false, i === chosen)));
+  for (const button of document.querySelectorAll('[data-mode]')) {
+    button.classList.toggle('on', MODES[button.dataset.mode] === shared.mode.value);
+    button.onclick = () => {
+      shared.mode.value = MODES[button.dataset.mode];
+      for (const b of document.querySelectorAll('[data-mode]')) b.classList.toggle('on', b === button);
+    };
+  }
+  const exposure = document.getElementById('exposure');
+  exposure.value = params.get('exposure') ?? 0;
+  exposure.oninput = () => {
+    shared.exposure.value = Math.pow(2, Number(exposure.value));
+    document.getElementById('exposureValue').textContent = exposure.value;
+  };
+  exposure.oninput();
+
+  // Orbit about a point ahead of the camera; walk with the mouse captured (WASD, Q/E down/up).
+  // (OrbitControls turns the camera to its target, the origin, when made: the view is placed again.)
+  const orbit = new OrbitControls(view, renderer.domElement);
+  const walk = new PointerLockControls(view, renderer.domElement);
+  const resetOrbitTarget = () => {
+    const ahead = new THREE.Vector3(0, 0, -1).applyQuaternion(view.quaternion);
+    const distance = Math.max(box.getCenter(new THREE.Vector3()).sub(view.position).dot(ahead), size * 0.05);
+    orbit.target.copy(view.position).addScaledVector(ahead, distance);
+    orbit.update();
+  };
+  const place = (i) => {
+    if (cameras[i]) jumpTo(view, cameras[i].camera, view.aspect);
+    else frameBox(view, box, view.aspect);
+    resetOrbitTarget();
+  };
+  place(chosen);
+  cameraSelect.onchange = () => place(Number(cameraSelect.value));
+  let walking = false;
+  const setWalking = (on) => {
+    walking = on;
+    orbit.enabled = !on;
+    document.getElementById('walk').classList.toggle('on', on);
+    document.getElementById('orbit').classList.toggle('on', !on);
+    if (!on) resetOrbitTarget();
+  };
+  document.getElementById('walk').onclick = () => { setWalking(true); walk.lock(); };
+  document.getElementById('orbit').onclick = () => { walk.unlock(); setWalking(false); };
+  renderer.domElement.addEventListener('click', () => { if (walking && !walk.isLocked) walk.lock(); });
+  const keys = new Set();
+  addEventListener('keydown', (e) => keys.add(e.code));
+  addEventListener('keyup', (e) => keys.delete(e.code));
+
+  const bake = await fetchJson(sceneUrl(scene, 'bake.json')).catch(() => null);
+  document.getElementById('info').textContent = [
+    `${counts.meshes} meshes` + (counts.unlit ? `, ${counts.unlit} primitives without a lightmap (shown at ${UNLIT_LEVEL} × albedo)` : ''),
+    bake ? `baked in ${Number(bake.total_seconds).toFixed(2)} s, voxel size ${Number(bake.voxel_size).toPrecision(3)}` : '',
+    'walk: click, then WASD, Q/E, Shift; Esc',
+  ].filter(Boolean).join('\n');
+
+  renderer.xr.enabled = true;
+  document.body.appendChild(VRButton.createButton(renderer));
+  addEventListener('resize', () => {
+    view.aspect = innerWidth / innerHeight;
+    view.updateProjectionMatrix();
+    renderer.setSize(innerWidth, innerHeight);
+  });
+
+  const timer = new THREE.Timer();
+  let frames = 0;
+  renderer.setAnimationLoop(() => {
+    timer.update();
+    const dt = Math.min(timer.getDelta(), 0.1);
+    if (walking && walk.isLocked) {
+      const speed = size * 0.1 * (keys.has('ShiftLeft') || keys.has('ShiftRight') ? 4 : 1) * dt;
+      const axis = (plus, minus) => (keys.has(plus) ? 1 : 0) - (keys.has(minus) ? 1 : 0);
+      walk.moveForward(speed * (axis('KeyW', 'KeyS') + axis('ArrowUp', 'ArrowDown')));
+      walk.moveRight(speed * (axis('KeyD', 'KeyA') + axis('ArrowRight', 'ArrowLeft')));
+      view.position.y += speed * axis('KeyE', 'KeyQ');
+    }
+    renderer.render(world, view);
+    if (capturingPage && ++frames === 2) fetch('/ready', { method: 'POST' });
+  });
+}
+
+main().catch((error) => report(error.stack || String(error)));
