@@ -132,18 +132,16 @@ double totalSeconds(const std::vector<StageTime>& stages) {
     return seconds;
 }
 
-// A scene none of whose meshes has TEXCOORD_1, baked into the one shared atlas: generated UVs
-// give it a lightmap. Where some meshes have their own layout (a Blender lightmap pack), or
-// atlas groups or one image per mesh are asked for, generated charts would share images with
-// those layouts: not yet; those meshes stay out of the lightmap with a warning, as before.
-bool needsLightmapUvs(const Scene& scene, const LightmapSettings& settings) {
-    if (settings.atlasPerMesh || !settings.atlases.empty()) return false;
-    bool anyTriangles = false;
-    for (const Mesh& mesh : scene.meshes) {
-        if (!mesh.uv1.empty()) return false;
-        anyTriangles = anyTriangles || mesh.triangleCount() > 0;
-    }
-    return anyTriangles;
+// The name of the image of generated charts in a scene whose other meshes have their own
+// TEXCOORD_1: "lightmap_generated", or with a number where an atlas group has taken that.
+std::string generatedAtlasName(const LightmapSettings& settings) {
+    const auto taken = [&](const std::string& name) {
+        return std::any_of(settings.atlases.begin(), settings.atlases.end(),
+                           [&](const AtlasGroup& group) { return group.name == name; });
+    };
+    std::string name = "lightmap_generated";
+    for (int n = 2; taken(name); ++n) name = "lightmap_generated_" + std::to_string(n);
+    return name;
 }
 
 BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnostics) {
@@ -162,25 +160,42 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
     checkLightAttenuationNames(scene, settings.lighting);
     if (settings.outputs.lightmaps) checkAtlasGroups(scene, settings.lightmap);
     LightmapSettings lightmap = settings.lightmap;  // generated UVs may need a larger atlas
-    if (settings.outputs.lightmaps && settings.generateLightmapUvs && needsLightmapUvs(scene, settings.lightmap)) {
+    // Generated UVs for the meshes of the shared atlas that have none: into the shared atlas
+    // where none of its meshes has TEXCOORD_1, else into an image of their own (their charts
+    // cannot share another layout's). Meshes of atlas groups, or of one image per mesh, keep
+    // what they have.
+    const MeshesWithoutUv1 withoutUv1 = settings.outputs.lightmaps && settings.generateLightmapUvs
+                                            ? sharedAtlasMeshesWithoutUv1(scene, settings.lightmap)
+                                            : MeshesWithoutUv1{};
+    if (!withoutUv1.meshes.empty()) {
         result.lightmapUvs = timed(result.stages, "lightmap uvs", [&] {
-            return generateLightmapUvs(scene, settings.lightmap.width, settings.lightmap.height);
+            return generateLightmapUvs(scene, withoutUv1.meshes, settings.lightmap.width, settings.lightmap.height);
         });
-        if (!settings.quiet) std::fprintf(stderr, "%s\n", describeLightmapUvs(*result.lightmapUvs).c_str());
-        for (const Mesh& mesh : scene.meshes) result.generatedLayouts.push_back({mesh.source, mesh.uv1, mesh.indices});
-        if (result.lightmapUvs->width != lightmap.width || result.lightmapUvs->height != lightmap.height) {
-            diagnostics.warn(scene.sourcePath + ": the generated lightmap UVs' " +
-                             std::to_string(result.lightmapUvs->charts) + " charts need a " +
-                             std::to_string(result.lightmapUvs->width) + " x " +
-                             std::to_string(result.lightmapUvs->height) + " atlas, not " +
-                             std::to_string(lightmap.width) + " x " + std::to_string(lightmap.height) +
+        const LightmapUvReport& uvs = *result.lightmapUvs;
+        if (!settings.quiet) std::fprintf(stderr, "%s\n", describeLightmapUvs(uvs).c_str());
+        result.generatedLayouts.resize(scene.meshes.size());
+        for (size_t m = 0; m < scene.meshes.size(); ++m) result.generatedLayouts[m].source = scene.meshes[m].source;
+        for (const uint32_t m : withoutUv1.meshes)
+            result.generatedLayouts[m] = {scene.meshes[m].source, scene.meshes[m].uv1, scene.meshes[m].indices};
+        if (withoutUv1.othersHaveUv1) {
+            AtlasGroup generated;
+            generated.name = generatedAtlasName(lightmap);
+            generated.meshIndices = withoutUv1.meshes;
+            generated.width = uvs.width;
+            generated.height = uvs.height;
+            generated.origin = "generated lightmap UVs";
+            lightmap.atlases.push_back(generated);
+        } else if (uvs.width != lightmap.width || uvs.height != lightmap.height) {
+            diagnostics.warn(scene.sourcePath + ": the generated lightmap UVs' " + std::to_string(uvs.charts) +
+                             " charts need a " + std::to_string(uvs.width) + " x " + std::to_string(uvs.height) +
+                             " atlas, not " + std::to_string(lightmap.width) + " x " + std::to_string(lightmap.height) +
                              ": the lightmap is baked at that size");
-            lightmap.width = result.lightmapUvs->width;
-            lightmap.height = result.lightmapUvs->height;
-            BakeSettings grown = settings;
-            grown.lightmap = lightmap;
-            checkMemoryBudget(scene, grown, voxelSize);
+            lightmap.width = uvs.width;
+            lightmap.height = uvs.height;
         }
+        BakeSettings grown = settings;
+        grown.lightmap = lightmap;
+        checkMemoryBudget(scene, grown, voxelSize);
     }
     if (scene.lights.empty() && !scene.hasEmitters())
         diagnostics.warn(scene.sourcePath + ": the scene has no lights and no emissive materials: the bake is black");

@@ -78,7 +78,7 @@ void LightmapSettings::validate() const {
             throw SettingsError(atlasLabel(group) + ": resolution " + std::to_string(group.width) + " x " +
                                 std::to_string(group.height) + " is outside 1.." + std::to_string(kMaxLightmapResolution) +
                                 " (the range of lightmap-res)");
-        if (group.meshes.empty()) throw SettingsError(atlasLabel(group) + ": names no meshes");
+        if (group.meshes.empty() && group.meshIndices.empty()) throw SettingsError(atlasLabel(group) + ": names no meshes");
         for (const std::string& mesh : group.meshes) {
             const auto [owner, first] = groupOfMesh.emplace(mesh, &group);
             if (!first && owner->second != &group)
@@ -284,7 +284,9 @@ std::string namesInScene(const Scene& scene) {
 // Which group bakes each scene mesh (-1: the shared atlas).
 std::vector<int> assignAtlasGroups(const Scene& scene, const std::vector<AtlasGroup>& groups) {
     std::vector<int> groupOf(scene.meshes.size(), -1);
-    for (size_t g = 0; g < groups.size(); ++g)
+    for (size_t g = 0; g < groups.size(); ++g) {
+        for (const uint32_t m : groups[g].meshIndices)
+            if (m < groupOf.size()) groupOf[m] = static_cast<int>(g);
         for (const std::string& entry : groups[g].meshes) {
             bool found = false;
             for (size_t m = 0; m < scene.meshes.size(); ++m) {
@@ -302,6 +304,7 @@ std::vector<int> assignAtlasGroups(const Scene& scene, const std::vector<AtlasGr
                 throw SettingsError(atlasLabel(groups[g]) + ": " + scene.sourcePath + " has no node or mesh named '" +
                                     entry + "' (it has: " + namesInScene(scene) + ")");
         }
+    }
     return groupOf;
 }
 
@@ -351,6 +354,21 @@ AtlasMembers assignAtlasMembers(const Scene& scene, const LightmapSettings& sett
 }
 
 }  // namespace
+
+MeshesWithoutUv1 sharedAtlasMeshesWithoutUv1(const Scene& scene, const LightmapSettings& settings) {
+    MeshesWithoutUv1 found;
+    if (settings.atlasPerMesh) return found;
+    const std::vector<int> groupOf = assignAtlasGroups(scene, settings.atlases);
+    for (size_t m = 0; m < scene.meshes.size(); ++m) {
+        const Mesh& mesh = scene.meshes[m];
+        if (groupOf[m] >= 0 || mesh.triangleCount() == 0 || scene.materialOf(mesh).emissive()) continue;
+        if (mesh.uv1.empty())
+            found.meshes.push_back(static_cast<uint32_t>(m));
+        else
+            found.othersHaveUv1 = true;
+    }
+    return found;
+}
 
 void checkAtlasGroups(const Scene& scene, const LightmapSettings& settings) {
     settings.validate();

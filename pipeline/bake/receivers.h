@@ -43,6 +43,7 @@ constexpr int kMaxLightmapResolution = 16384;
 struct AtlasGroup {
     std::string name;                 // the image's name and file stem: letters, digits, '-', '_'
     std::vector<std::string> meshes;  // node, mesh or "<mesh>/<primitive>" names (see above)
+    std::vector<uint32_t> meshIndices;  // a group the bake makes (generated UVs): these meshes, by index
     int width = 0;                    // texels; 0 × 0: the shared atlas's resolution (lightmap-res)
     int height = 0;
     std::string origin;               // where it was declared ("job.json: atlases[0]"), for messages
@@ -77,6 +78,15 @@ struct LightmapAtlas {
 // "lightmap" names a group only when no mesh is left for the shared atlas (SettingsError
 // naming the group and where it was declared).
 void checkAtlasGroups(const Scene& scene, const LightmapSettings& settings);
+
+// What generated lightmap UVs are for (bake.cpp): the meshes the shared atlas would bake (with
+// triangles, not emitting, named by no group) that have no TEXCOORD_1, and whether some of its
+// meshes have one of their own. Nothing for one image per mesh.
+struct MeshesWithoutUv1 {
+    std::vector<uint32_t> meshes;
+    bool othersHaveUv1 = false;
+};
+MeshesWithoutUv1 sharedAtlasMeshesWithoutUv1(const Scene& scene, const LightmapSettings& settings);
 
 // Global triangle ids follow gatherTriangles (mesh-major, every triangle). The shared atlas
 // comes first when it has meshes, then the groups in the order given; a group left with no

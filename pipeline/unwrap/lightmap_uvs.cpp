@@ -323,17 +323,25 @@ void measureStretch(const Scene& scene, const std::vector<Chart>& charts, double
 
 }  // namespace
 
-LightmapUvReport generateLightmapUvs(Scene& scene, int width, int height) {
+LightmapUvReport generateLightmapUvs(Scene& scene, const std::vector<uint32_t>& meshes, int width, int height) {
     if (width < 16 || height < 16 || width > 16384 || height > 16384)
         throw SettingsError("lightmap UVs: an atlas of " + std::to_string(width) + " x " + std::to_string(height) +
                             " texels is outside 16 .. 16384 a side");
+    for (const uint32_t m : meshes)
+        if (m >= scene.meshes.size())
+            throw SettingsError("lightmap UVs: mesh " + std::to_string(m) + " of a scene of " +
+                                std::to_string(scene.meshes.size()));
     const auto start = std::chrono::steady_clock::now();
     LightmapUvReport report;
     report.width = width;
     report.height = height;
     std::vector<std::vector<Chart>> perMesh(scene.meshes.size());
-    tbb::parallel_for(size_t(0), scene.meshes.size(), [&](size_t m) {
-        if (scene.meshes[m].triangleCount() > 0) perMesh[m] = meshCharts(scene.meshes[m], uint32_t(m));
+    std::vector<uint32_t> unwrapped = meshes;  // once each, however often given
+    std::sort(unwrapped.begin(), unwrapped.end());
+    unwrapped.erase(std::unique(unwrapped.begin(), unwrapped.end()), unwrapped.end());
+    tbb::parallel_for(size_t(0), unwrapped.size(), [&](size_t i) {
+        const uint32_t m = unwrapped[i];
+        if (scene.meshes[m].triangleCount() > 0) perMesh[m] = meshCharts(scene.meshes[m], m);
     });
     std::vector<Chart> charts;
     for (auto& list : perMesh)

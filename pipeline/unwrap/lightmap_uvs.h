@@ -1,5 +1,5 @@
-// Lightmap UVs for scenes that have none: takes a Scene whose meshes lack TEXCOORD_1 and an
-// atlas size in texels, gives every mesh a TEXCOORD_1 (uv1) in one shared atlas.
+// Lightmap UVs for meshes that have none: takes a Scene, the meshes lacking TEXCOORD_1 and an
+// atlas size in texels, gives each of those meshes a TEXCOORD_1 (uv1) in one shared atlas.
 //
 // Charts: triangles joined across shared edges (positions welded exactly) while their normal
 // stays within kChartAngleDegrees of the chart's first (largest) triangle, so projecting the
@@ -43,13 +43,14 @@ struct LightmapUvReport {
     double seconds = 0.0;
 };
 
-// Gives every mesh of `scene` with triangles a uv1 in a width × height atlas, or one doubled
-// (up to kMaxAtlasSide a side) until the charts take at least a quarter of it at the smallest
-// texel size that fits: thousands of small charts need room for their padding (the caller
-// bakes at report.width × height). Meshes that already have a uv1 are replaced: the caller
-// decides when to generate. SettingsError for an atlas under 16 texels a side or over 16384;
-// Error when the charts fit no atlas of kMaxAtlasSide.
-LightmapUvReport generateLightmapUvs(Scene& scene, int width, int height);
+// Gives the meshes `meshes` (indices into scene.meshes) that have triangles a uv1 in one
+// width × height atlas, or one doubled (up to kMaxAtlasSide a side) until the charts take at
+// least a quarter of it at the smallest texel size that fits: thousands of small charts need
+// room for their padding (the caller bakes at report.width × height). A uv1 those meshes
+// already have is replaced, and other meshes are left as they are: the caller decides which
+// to unwrap. SettingsError for an atlas under 16 texels a side or over 16384, or a mesh index
+// out of range; Error when the charts fit no atlas of kMaxAtlasSide.
+LightmapUvReport generateLightmapUvs(Scene& scene, const std::vector<uint32_t>& meshes, int width, int height);
 
 // "lightmap UVs: 12 meshes, 340 charts, texel 1.2 cm, 71% of the atlas, stretch ≤ 1.15".
 std::string describeLightmapUvs(const LightmapUvReport& report);

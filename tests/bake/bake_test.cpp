@@ -14,6 +14,7 @@
 
 #include <catch2/catch.hpp>
 #include <glm/gtc/quaternion.hpp>
+#include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -21,6 +22,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <set>
 #include <tuple>
 
 using namespace vl;
@@ -773,7 +775,7 @@ TEST_CASE("A scene without TEXCOORD_1 bakes into generated lightmap UVs, and say
             for (size_t m = 0; m < back.meshes.size(); ++m) {
                 const Mesh &a = original.meshes[m], &b = back.meshes[m];
                 INFO("mesh " << a.name);
-                CHECK(b.uv1.size() == b.positions.size());
+                CHECK(b.uv1.size() == (original.materialOf(a).emissive() ? 0 : b.positions.size()));
                 REQUIRE(b.indices.size() == a.indices.size());
                 size_t same = 0;
                 for (size_t i = 0; i < a.indices.size(); ++i)
@@ -785,12 +787,13 @@ TEST_CASE("A scene without TEXCOORD_1 bakes into generated lightmap UVs, and say
             readGltfModel((out / "scene.glb").string(), model, encoded);
             for (const tinygltf::Mesh& mesh : model.meshes)
                 for (const tinygltf::Primitive& primitive : mesh.primitives) {
-                    CHECK(primitive.attributes.count("TEXCOORD_1") == 1);
                     REQUIRE(primitive.material >= 0);
-                    // All but the light: the bake leaves emitters out of the lightmap.
+                    // All but the light: the bake leaves emitters out of the lightmap, and
+                    // out of the atlas.
                     const tinygltf::Material& material = model.materials[size_t(primitive.material)];
                     const bool emits = material.emissiveFactor[0] + material.emissiveFactor[1] + material.emissiveFactor[2] > 0.0;
                     INFO("material " << material.name);
+                    CHECK(primitive.attributes.count("TEXCOORD_1") == (emits ? 0u : 1u));
                     CHECK(material.extensions.count("MOZ_lightmap") == (emits ? 0u : 1u));
                 }
             const Image lightmap = readImage((out / "lightmap.exr").string());
@@ -806,4 +809,80 @@ TEST_CASE("A scene without TEXCOORD_1 bakes into generated lightmap UVs, and say
             CHECK(warned("has no TEXCOORD_1"));
         }
     }
+}
+
+TEST_CASE("A scene where some meshes have TEXCOORD_1 bakes the others into generated UVs of their own image", "[bake]") {
+    // The Cycles quad box with ShortBlock's TEXCOORD_1 taken out (as a scene assembled from a
+    // lightmapped room and a prop without one): the room keeps its own layout in lightmap.exr,
+    // the block gets generated charts in lightmap_generated.exr instead of being left out, and
+    // the room's lightmap is the one the untouched scene bakes.
+    VL_SKIP_WITHOUT_SHARED();
+    const fs::path dir = tempDir("mixed-uvs");
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    fs::copy_file(sharedDir() + "/reference/cbox_quad_spec.bin", dir / "cbox_quad_spec.bin");
+    nlohmann::json gltf = nlohmann::json::parse(std::ifstream(sharedDir() + "/reference/cornell_quad.gltf"));
+    for (auto& mesh : gltf["meshes"])
+        if (mesh["name"] == "ShortBlock") mesh["primitives"][0]["attributes"].erase("TEXCOORD_1");
+    std::ofstream(dir / "mixed.gltf") << gltf.dump();
+
+    BakeJob whole = quickJob(sharedDir() + "/reference/cornell_quad.gltf", dir / "whole");
+    BakeJob mixed = quickJob((dir / "mixed.gltf").string(), dir / "mixed");
+    const BakeReport wholeReport = runBake(whole), mixedReport = runBake(mixed);
+    INFO(wholeReport.error << mixedReport.error);
+    REQUIRE(wholeReport.ok);
+    REQUIRE(mixedReport.ok);
+    for (const std::string& warning : mixedReport.warnings) CHECK(warning.find("TEXCOORD_1") == std::string::npos);
+    REQUIRE(mixedReport.lightmapUvs);
+    CHECK(mixedReport.lightmapUvs->meshes == 1);
+    CHECK(mixedReport.lightmapUvs->charts == 5);  // a block on the floor: its bottom is a face too, or not
+    REQUIRE(fs::exists(dir / "mixed" / "lightmap_generated.exr"));
+
+    // The block's generated lightmap is lit: every covered texel above zero.
+    const Image block = readImage((dir / "mixed" / "lightmap_generated.exr").string());
+    const Image blockMask = readImage((dir / "mixed" / "lightmap_generated_mask.exr").string());
+    size_t covered = 0, lit = 0;
+    for (int y = 0; y < block.height; ++y)
+        for (int x = 0; x < block.width; ++x)
+            if (blockMask.at(x, y, 0) > 0.5f) {
+                ++covered;
+                lit += block.at(x, y, 0) + block.at(x, y, 1) + block.at(x, y, 2) > 0.0f ? 1 : 0;
+            }
+    CHECK(covered > size_t(block.width) * size_t(block.height) / 4);
+    CHECK(lit >= covered * 95 / 100);  // the block's bottom, on the floor, is dark
+
+    // The room's lightmap: the same light as the untouched scene's over the texels both cover.
+    // Its indirect part is the same; its direct part differs only by the penumbrae's sampling
+    // (a receiver sample's index seeds its emitter strata, and the block's texels leaving the
+    // atlas renumber the room's samples), which averages out in the mean.
+    const Image roomMask = readImage((dir / "mixed" / "lightmap_mask.exr").string());
+    MetricOptions options;
+    options.mask = &roomMask;
+    const auto compare = [&](const std::string& part) {
+        return compareImages(readImage((dir / "mixed" / ("lightmap" + part + ".exr")).string()),
+                             readImage((dir / "whole" / ("lightmap" + part + ".exr")).string()), options);
+    };
+    const ErrorMetrics total = compare(""), indirect = compare("_indirect"), direct = compare("_direct");
+    INFO("room against the untouched bake: total " << total.relativeRmse << ", direct " << direct.relativeRmse
+                                                   << ", indirect " << indirect.relativeRmse);
+    CHECK(indirect.relativeRmse < 1e-3);
+    CHECK(direct.relativeRmse < 0.05);
+    for (int c = 0; c < 3; ++c) CHECK(total.meanTest[c] == Approx(total.meanReference[c]).epsilon(0.002));
+
+    // glTF out: the block's material (White, shared with the walls) is copied for the second
+    // lightmap, and the block's primitive carries the generated TEXCOORD_1.
+    tinygltf::Model model;
+    gltf::EncodedImages encoded;
+    readGltfModel((dir / "mixed" / "scene.glb").string(), model, encoded);
+    std::set<int> lightmapTextures;
+    for (const tinygltf::Mesh& mesh : model.meshes) {
+        const tinygltf::Primitive& primitive = mesh.primitives[0];
+        const tinygltf::Material& material = model.materials[size_t(primitive.material)];
+        const auto moz = material.extensions.find("MOZ_lightmap");
+        if (moz == material.extensions.end()) continue;
+        lightmapTextures.insert(moz->second.Get("index").GetNumberAsInt());
+        INFO(mesh.name);
+        CHECK(primitive.attributes.count("TEXCOORD_1") == 1);
+    }
+    CHECK(lightmapTextures.size() == 2);
 }

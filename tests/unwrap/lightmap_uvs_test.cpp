@@ -181,13 +181,19 @@ void checkAtlas(Scene& scene, const LightmapUvReport& report, const std::string&
     }
 }
 
+std::vector<uint32_t> everyMesh(const Scene& scene) {
+    std::vector<uint32_t> meshes(scene.meshes.size());
+    std::iota(meshes.begin(), meshes.end(), 0u);
+    return meshes;
+}
+
 }  // namespace
 
 TEST_CASE("A box unwraps into its six faces, packed without overlap at one texel size", "[unwrap]") {
     VL_SKIP_WITHOUT_SHARED();
     Scene scene = loadGltf(test::sharedDir() + "/scenes/khronos-sample-assets/Models/BoxTextured/glTF/BoxTextured.gltf");
     const size_t triangles = scene.meshes[0].triangleCount();
-    const LightmapUvReport report = generateLightmapUvs(scene, 256, 256);
+    const LightmapUvReport report = generateLightmapUvs(scene, everyMesh(scene), 256, 256);
     CHECK(report.charts == 6);
     CHECK(report.width == 256);
     CHECK(report.maxStretch == Approx(1.0).epsilon(1e-4));  // flat faces projected flat
@@ -204,13 +210,13 @@ TEST_CASE("Generated UVs hold on a Cornell box of ten meshes and on a level of 1
     // need more room for their padding: the atlas grows (2048²) rather than failing.
     VL_SKIP_WITHOUT_SHARED();
     Scene box = loadGltf(test::sharedDir() + "/scenes/cornellbox-nvpro/cornellBox.gltf");
-    const LightmapUvReport boxReport = generateLightmapUvs(box, 256, 256);
+    const LightmapUvReport boxReport = generateLightmapUvs(box, everyMesh(box), 256, 256);
     CHECK(boxReport.width == 256);
     CHECK(boxReport.maxStretch <= 1.0 / std::cos(glm::radians(double(kChartAngleDegrees))) + 1e-3);
     checkAtlas(box, boxReport, "nvpro Cornell box");
 
     Scene level = loadGltf(test::sharedDir() + "/scenes/interior-zdm2-godot/zdm2.glb");
-    const LightmapUvReport levelReport = generateLightmapUvs(level, 256, 256);
+    const LightmapUvReport levelReport = generateLightmapUvs(level, everyMesh(level), 256, 256);
     CHECK(levelReport.width > 256);
     CHECK(levelReport.width == levelReport.height);
     CHECK(levelReport.occupancy >= 0.25);  // the growth rule's floor
@@ -219,9 +225,10 @@ TEST_CASE("Generated UVs hold on a Cornell box of ten meshes and on a level of 1
 
 TEST_CASE("An atlas size outside 16 .. 16384 is refused by name; a scene without triangles keeps its atlas", "[unwrap]") {
     Scene scene;
-    CHECK_THROWS_WITH(generateLightmapUvs(scene, 8, 256), Catch::Contains("lightmap UVs") && Catch::Contains("8 x 256"));
-    const LightmapUvReport report = generateLightmapUvs(scene, 64, 32);
+    CHECK_THROWS_WITH(generateLightmapUvs(scene, {}, 8, 256), Catch::Contains("lightmap UVs") && Catch::Contains("8 x 256"));
+    const LightmapUvReport report = generateLightmapUvs(scene, {}, 64, 32);
     CHECK(report.charts == 0);
     CHECK(report.width == 64);  // the bake takes this size: never 0
     CHECK(report.height == 32);
+    CHECK_THROWS_WITH(generateLightmapUvs(scene, {3}, 64, 32), Catch::Contains("mesh 3 of a scene of 0"));
 }
