@@ -17,6 +17,16 @@ namespace vl {
 
 namespace {
 
+// How far (in texels) a chart's corners stay from the edges of the texels its padding begins
+// at: beyond a float uv's rounding at kMaxAtlasSide (2^-24 × 8192 = 5e-4 texel), so no corner
+// read back from TEXCOORD_1 lands in the padding.
+constexpr double kChartInset = 1.0 / 256.0;
+constexpr float kTouchSlack = 1.0f / 512.0f;
+// The texel size by profiles is searched within [kProfileBracket, 1] of the rectangles' (on
+// zdm2 it comes out at 0.93 of it) in kProfileSteps bisections: to 0.6% of it.
+constexpr double kProfileBracket = 0.8;
+constexpr int kProfileSteps = 5;
+
 struct Chart {
     uint32_t mesh = 0;
     std::vector<uint32_t> triangles;
@@ -26,7 +36,22 @@ struct Chart {
     bool turned = false;  // packed with U along the atlas's v
     glm::ivec2 origin{0};  // texel of its rectangle's corner
     glm::ivec2 size{0};    // rectangle in texels, padding included, after `turned`
+    int orientation = -1;  // profile packing: 0 as is, 1 half-turned, 2 transposed, 3 both; -1 rectangle packing
+    glm::ivec2 texels{0};  // texels its footprint spans along U and V
 };
+
+// Where a point of the chart (in texels from the chart's lower corner, inset) lands in the
+// atlas, for a chart packed by its profile.
+vec2 placedOnAtlas(const Chart& chart, vec2 local) {
+    const vec2 n(chart.texels);
+    switch (chart.orientation) {
+    case 1: local = n - local; break;
+    case 2: local = vec2(local.y, local.x); break;
+    case 3: local = vec2(n.y - local.y, n.x - local.x); break;
+    default: break;
+    }
+    return vec2(chart.origin) + vec2(float(kPaddingTexels)) + local;
+}
 
 // A point, and triangle t of `mesh`, on a chart's plane.
 vec2 onChart(const Chart& chart, const vec3& p) { return vec2(glm::dot(p, chart.axisU), glm::dot(p, chart.axisV)); }
@@ -253,8 +278,15 @@ bool pack(std::vector<Chart>& charts, const std::vector<uint32_t>& order, double
     std::vector<Segment> skyline{{0, 0, width}};
     for (uint32_t c : order) {
         Chart& chart = charts[c];
-        const int a = static_cast<int>(std::ceil(double(chart.upper.x - chart.lower.x) / s)) + 2 * kPaddingTexels + 1;
-        const int b = static_cast<int>(std::ceil(double(chart.upper.y - chart.lower.y) / s)) + 2 * kPaddingTexels + 1;
+        // A chart e texels long, set kChartInset into its first texel, touches
+        // floor(e + 2 kChartInset) + 1 texels and stays kChartInset away from the texels on
+        // either side; then its padding on both sides.
+        const auto texels = [&](float extent) {
+            return static_cast<int>(std::floor(double(extent) / s + 2.0 * kChartInset)) + 1 + 2 * kPaddingTexels;
+        };
+        const int a = texels(chart.upper.x - chart.lower.x);
+        const int b = texels(chart.upper.y - chart.lower.y);
+        chart.orientation = -1;
         chart.turned = b > a;
         chart.size = chart.turned ? glm::ivec2(b, a) : glm::ivec2(a, b);
         const int w = chart.size.x, h = chart.size.y;
@@ -294,6 +326,170 @@ bool pack(std::vector<Chart>& charts, const std::vector<uint32_t>& order, double
             else
                 skyline.push_back(g);
         }
+    }
+    return true;
+}
+
+// The extent along the other axis of one triangle (in texels) within the strip of texels i
+// along `axis`, the strip widened by kTouchSlack on both sides; false when it misses the strip.
+bool stripRange(const vec2 (&p)[3], int axis, int i, float& low, float& high) {
+    const int other = 1 - axis;
+    low = std::numeric_limits<float>::max();
+    high = -low;
+    const float a = float(i) - kTouchSlack, b = float(i + 1) + kTouchSlack;
+    for (int k = 0; k < 3; ++k) {
+        const vec2 &p0 = p[k], &p1 = p[(k + 1) % 3];
+        if (p0[axis] >= a && p0[axis] <= b) {
+            low = std::min(low, p0[other]);
+            high = std::max(high, p0[other]);
+        }
+        for (const float edge : {a, b}) {
+            const float d0 = p0[axis] - edge, d1 = p1[axis] - edge;
+            if ((d0 < 0.0f) == (d1 < 0.0f) || d0 == d1) continue;
+            const float t = d0 / (d0 - d1);
+            const float at = p0[other] + t * (p1[other] - p0[other]);
+            low = std::min(low, at);
+            high = std::max(high, at);
+        }
+    }
+    return low <= high;
+}
+
+// A chart's footprint at texel size s, as the texels' hull per column (along U) and per row
+// (along V): [low, high] rows per column and columns per row.
+struct Footprint {
+    std::vector<glm::ivec2> columns, rows;
+};
+
+Footprint footprint(const Mesh& mesh, Chart& chart, double s) {
+    const auto texels = [&](float extent) { return static_cast<int>(std::floor(double(extent) / s + 2.0 * kChartInset)) + 1; };
+    chart.texels = glm::ivec2(texels(chart.upper.x - chart.lower.x), texels(chart.upper.y - chart.lower.y));
+    Footprint f;
+    f.columns.assign(size_t(chart.texels.x), glm::ivec2(std::numeric_limits<int>::max(), -1));
+    f.rows.assign(size_t(chart.texels.y), glm::ivec2(std::numeric_limits<int>::max(), -1));
+    for (uint32_t t : chart.triangles) {
+        vec2 p[3];
+        chartTriangle(mesh, chart, t, p);
+        for (vec2& q : p) q = vec2((glm::dvec2(q - chart.lower)) / s + kChartInset);
+        for (int axis = 0; axis < 2; ++axis) {
+            std::vector<glm::ivec2>& lines = axis == 0 ? f.columns : f.rows;
+            const int extent = axis == 0 ? chart.texels.y : chart.texels.x;
+            const float lowest = std::min({p[0][axis], p[1][axis], p[2][axis]});
+            const float highest = std::max({p[0][axis], p[1][axis], p[2][axis]});
+            // Within kTouchSlack of a texel's edge a point touches the texels on both sides: a
+            // corner read back from TEXCOORD_1 may land on either.
+            const int first = std::max(0, int(std::floor(lowest - kTouchSlack)));
+            const int last = std::min(int(lines.size()) - 1, int(std::floor(highest + kTouchSlack)));
+            for (int i = first; i <= last; ++i) {
+                float low, high;
+                if (!stripRange(p, axis, i, low, high)) continue;
+                glm::ivec2& line = lines[size_t(i)];
+                line.x = std::min(line.x, std::clamp(int(std::floor(low - kTouchSlack)), 0, extent - 1));
+                line.y = std::max(line.y, std::clamp(int(std::floor(high + kTouchSlack)), 0, extent - 1));
+            }
+        }
+    }
+    return f;
+}
+
+// A chart's footprint grown by its padding, in one orientation, column by column.
+struct Profile {
+    std::vector<int> low, high;  // rows per column from the shape's corner; high −1: an empty column
+    int top = 0;                 // the highest row
+};
+
+struct Landing {
+    int x = -1, y = 0;  // x −1: nowhere
+    int top = std::numeric_limits<int>::max();
+    long waste = std::numeric_limits<long>::max();  // rows left empty under the shape
+};
+
+// Where a shape dropped onto the atlas's columns (heights: the first free row of each) lands
+// lowest, then wastes least, then lies leftmost.
+Landing lowestLanding(const Profile& profile, const std::vector<int>& heights, int height) {
+    Landing best;
+    const int width = int(heights.size()), w = int(profile.low.size());
+    if (w > width || profile.top >= height) return best;
+    // The column whose footprint starts lowest bounds where the shape can land.
+    size_t anchor = 0;
+    for (size_t column = 1; column < profile.low.size(); ++column)
+        if (profile.low[column] < profile.low[anchor]) anchor = column;
+    for (int x = 0; x + w <= width; ++x) {
+        // On a flat stretch of the atlas's top a shape lands as it would at the stretch's
+        // ends: only positions whose left or right column meets a step are tried.
+        const bool leftStep = x == 0 || heights[size_t(x)] != heights[size_t(x - 1)];
+        const bool rightStep = x + w == width || heights[size_t(x + w - 1)] != heights[size_t(x + w)];
+        if (!leftStep && !rightStep) continue;
+        if (heights[size_t(x) + anchor] - profile.low[anchor] + profile.top > best.top) continue;
+        int y = 0;
+        for (int column = 0; column < w; ++column)
+            if (profile.high[size_t(column)] >= 0) y = std::max(y, heights[size_t(x + column)] - profile.low[size_t(column)]);
+        const int top = y + profile.top;
+        if (top >= height || top > best.top) continue;
+        long waste = 0;
+        for (int column = 0; column < w; ++column)
+            if (profile.high[size_t(column)] >= 0) waste += y + profile.low[size_t(column)] - heights[size_t(x + column)];
+        if (top < best.top || waste < best.waste) best = {x, y, top, waste};
+    }
+    return best;
+}
+
+// Packing by profiles ("Tetris"): each chart's footprint, grown by its padding, falls down the
+// atlas onto what lies below it, column by column, in whichever of four orientations and at
+// whichever column its top lands lowest (then wastes least). Charts nest (a triangle's slope
+// over another's) where rectangles leave a chart's corners empty; a hole under an overhang
+// stays empty. False when they do not fit.
+bool packByProfiles(const Scene& scene, std::vector<Chart>& charts, const std::vector<uint32_t>& order, double s,
+                    int width, int height) {
+    std::vector<int> heights(size_t(width), 0);  // per atlas column: the first row above every chart
+    Profile profiles[4];
+    for (uint32_t c : order) {
+        Chart& chart = charts[c];
+        const Footprint f = footprint(scene.meshes[chart.mesh], chart, s);
+        const int nx = chart.texels.x, ny = chart.texels.y;
+        for (int o = 0; o < 4; ++o) {
+            // The footprint's lines in this orientation: columns, their rows, the shape's height.
+            const bool transposed = o >= 2, halfTurned = o == 1 || o == 3;
+            const std::vector<glm::ivec2>& lines = transposed ? f.rows : f.columns;
+            const int n = int(lines.size()), extent = transposed ? nx : ny;
+            const auto line = [&](int i) {
+                glm::ivec2 l = lines[size_t(halfTurned ? n - 1 - i : i)];
+                if (l.y < 0) return l;
+                return halfTurned ? glm::ivec2(extent - 1 - l.y, extent - 1 - l.x) : l;
+            };
+            Profile& profile = profiles[o];
+            profile.low.assign(size_t(n + 2 * kPaddingTexels), std::numeric_limits<int>::max());
+            profile.high.assign(size_t(n + 2 * kPaddingTexels), -1);
+            profile.top = 0;
+            for (int i = 0; i < n; ++i) {
+                const glm::ivec2 l = line(i);
+                if (l.y < 0) continue;
+                for (int d = -kPaddingTexels; d <= kPaddingTexels; ++d) {
+                    const size_t column = size_t(i + d + kPaddingTexels);
+                    profile.low[column] = std::min(profile.low[column], l.x);
+                    profile.high[column] = std::max(profile.high[column], l.y + 2 * kPaddingTexels);
+                }
+            }
+            for (size_t column = 0; column < profile.low.size(); ++column) profile.top = std::max(profile.top, profile.high[column]);
+        }
+        // The four orientations are searched side by side; the first best (lowest top, then
+        // least waste, then the earlier orientation and column) wins, as in one search.
+        Landing landings[4];
+        tbb::parallel_for(0, 4, [&](int o) { landings[o] = lowestLanding(profiles[o], heights, height); });
+        int bestOrientation = -1;
+        for (int o = 0; o < 4; ++o)
+            if (landings[o].x >= 0 && (bestOrientation < 0 || landings[o].top < landings[bestOrientation].top ||
+                                       (landings[o].top == landings[bestOrientation].top &&
+                                        landings[o].waste < landings[bestOrientation].waste)))
+                bestOrientation = o;
+        if (bestOrientation < 0) return false;
+        const Profile& profile = profiles[bestOrientation];
+        const int bestX = landings[bestOrientation].x, bestY = landings[bestOrientation].y;
+        for (size_t column = 0; column < profile.low.size(); ++column)
+            if (profile.high[column] >= 0)
+                heights[size_t(bestX) + column] = std::max(heights[size_t(bestX) + column], bestY + profile.high[column] + 1);
+        chart.orientation = bestOrientation;
+        chart.origin = glm::ivec2(bestX, bestY);
     }
     return true;
 }
@@ -361,18 +557,21 @@ LightmapUvReport generateLightmapUvs(Scene& scene, const std::vector<uint32_t>& 
         return ha > hb;
     });
     // The smallest texel size whose packing fits: the charts' area alone bounds it from below.
-    // Where the charts' padding alone overfills the atlas (thousands of small charts), the
-    // atlas doubles until the charts take at least a quarter of it.
+    // Rectangles (fast) choose the atlas and bracket the texel size; profiles (denser, slower)
+    // then refine it below the rectangles' in a few steps. Where the charts' padding alone
+    // overfills the atlas (thousands of small charts), the atlas doubles until the charts take
+    // at least a quarter of it.
     const auto lowest = [&] { return std::sqrt(std::max(projected, 1e-30) / (double(width) * double(height))); };
-    const auto fits = [&](double s) { return pack(charts, order, s, width, height); };
-    while (!fits(2.0 * lowest()) && std::max(width, height) < kMaxAtlasSide) {
+    const auto fitsRectangles = [&](double s) { return pack(charts, order, s, width, height); };
+    const auto fitsProfiles = [&](double s) { return packByProfiles(scene, charts, order, s, width, height); };
+    while (!fitsRectangles(2.0 * lowest()) && std::max(width, height) < kMaxAtlasSide) {
         width = std::min(2 * width, kMaxAtlasSide);
         height = std::min(2 * height, kMaxAtlasSide);
     }
     double lower = lowest();
     double upper = lower;
-    for (int k = 0; k < 60 && !fits(upper); ++k) upper *= 2.0;
-    if (!fits(upper))
+    for (int k = 0; k < 60 && !fitsRectangles(upper); ++k) upper *= 2.0;
+    if (!fitsRectangles(upper))
         throw Error("lightmap UVs: " + std::to_string(charts.size()) + " charts do not fit a " + std::to_string(width) +
                     " x " + std::to_string(height) + " atlas at any texel size (each takes " +
                     std::to_string(2 * kPaddingTexels + 1) + " texels of padding along each axis)");
@@ -380,13 +579,25 @@ LightmapUvReport generateLightmapUvs(Scene& scene, const std::vector<uint32_t>& 
     report.height = height;
     for (int k = 0; k < 24; ++k) {
         const double middle = 0.5 * (lower + upper);
-        if (pack(charts, order, middle, width, height))
+        if (fitsRectangles(middle))
             upper = middle;
         else
             lower = middle;
     }
-    const double s = upper;
-    pack(charts, order, s, width, height);
+    double s = upper;
+    if (fitsProfiles(upper)) {
+        lower = std::max(lowest(), kProfileBracket * upper);
+        bool packed = false;  // the last pack tried fitted: its layout stands
+        for (int k = 0; k < kProfileSteps; ++k) {
+            const double middle = 0.5 * (lower + upper);
+            packed = fitsProfiles(middle);
+            (packed ? upper : lower) = middle;
+        }
+        s = upper;
+        if (!packed) fitsProfiles(s);
+    } else {
+        fitsRectangles(s);  // profiles do not nest these charts at the rectangles' size: rectangles
+    }
     report.texelSize = s;
     report.charts = charts.size();
     report.occupancy = projected / (s * s) / (double(width) * double(height));
@@ -420,10 +631,15 @@ LightmapUvReport generateLightmapUvs(Scene& scene, const std::vector<uint32_t>& 
                         if (!mesh.normals.empty()) out.normals.push_back(mesh.normals[old]);
                         if (!mesh.uv0.empty()) out.uv0.push_back(mesh.uv0[old]);
                         if (!mesh.colors.empty()) out.colors.push_back(mesh.colors[old]);
-                        vec2 local(float((glm::dot(p, chart.axisU) - chart.lower.x) / s),
-                                   float((glm::dot(p, chart.axisV) - chart.lower.y) / s));
-                        if (chart.turned) local = vec2(local.y, local.x);
-                        const vec2 texel = vec2(chart.origin) + vec2(float(kPaddingTexels)) + local;
+                        vec2 local(float((glm::dot(p, chart.axisU) - chart.lower.x) / s + kChartInset),
+                                   float((glm::dot(p, chart.axisV) - chart.lower.y) / s + kChartInset));
+                        vec2 texel;
+                        if (chart.orientation >= 0) {
+                            texel = placedOnAtlas(chart, local);
+                        } else {
+                            if (chart.turned) local = vec2(local.y, local.x);
+                            texel = vec2(chart.origin) + vec2(float(kPaddingTexels)) + local;
+                        }
                         out.uv1.push_back(texel / vec2(float(width), float(height)));
                     }
                     out.indices[3 * size_t(t) + size_t(k)] = it->second;

@@ -6,9 +6,12 @@
 // chart flat along that normal stretches no triangle's area by more than 1/cos of it, and
 // while their projection overlaps none the chart holds (a surface folding back under itself
 // within the cone starts another chart). Each chart is projected onto the plane of that
-// normal, turned to its smallest bounding rectangle, and packed (skyline, bottom-left) at one
-// world-space texel size for the whole scene (density uniform in world units), the smallest
-// that fits, searched by bisection; every chart keeps kPaddingTexels empty texel on each side,
+// normal, turned to its smallest bounding rectangle, and packed at one world-space texel size
+// for the whole scene (density uniform in world units), the smallest that fits, searched by
+// bisection: rectangles (skyline) bracket it, then the charts' own texel footprints dropped
+// column by column ("profiles", in four orientations) refine it, so triangular charts nest
+// (zdm2: 47% → 53% covered at 1024², 55% → 64% at 2048²); every chart keeps kPaddingTexels
+// empty texel on each side,
 // so two charts' texels have at least 2 empty texels between them (issue 14's padding): a
 // bilinear lookup at a chart's edge reaches one texel out, which the bake's dilation fills
 // from that chart alone. Two texels a side (4 between) left nvpro's Cornell box at 59%

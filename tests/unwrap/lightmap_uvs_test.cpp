@@ -207,7 +207,7 @@ TEST_CASE("A box unwraps into its six faces, packed without overlap at one texel
 
 TEST_CASE("Generated UVs hold on a Cornell box of ten meshes and on a level of 15,000 charts", "[unwrap]") {
     // nvpro's Cornell box (no TEXCOORD_1) in its 256² atlas; zdm2's thousands of small charts
-    // need more room for their padding: the atlas grows (2048²) rather than failing.
+    // need more room for their padding: the atlas grows (1024²) rather than failing.
     VL_SKIP_WITHOUT_SHARED();
     Scene box = loadGltf(test::sharedDir() + "/scenes/cornellbox-nvpro/cornellBox.gltf");
     const LightmapUvReport boxReport = generateLightmapUvs(box, everyMesh(box), 256, 256);
@@ -221,6 +221,13 @@ TEST_CASE("Generated UVs hold on a Cornell box of ten meshes and on a level of 1
     CHECK(levelReport.width == levelReport.height);
     CHECK(levelReport.occupancy >= 0.25);  // the growth rule's floor
     checkAtlas(level, levelReport, "zdm2");
+
+    // Issue 14's 60% on zdm2, asked for at 2048² (README): the charts' area alone, which the
+    // covered texels exceed.
+    Scene large = loadGltf(test::sharedDir() + "/scenes/interior-zdm2-godot/zdm2.glb");
+    const LightmapUvReport largeReport = generateLightmapUvs(large, everyMesh(large), 2048, 2048);
+    CHECK(largeReport.width == 2048);
+    CHECK(largeReport.occupancy >= 0.60);
 }
 
 TEST_CASE("An atlas size outside 16 .. 16384 is refused by name; a scene without triangles keeps its atlas", "[unwrap]") {
