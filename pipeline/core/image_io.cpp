@@ -41,6 +41,9 @@ void writeExr(const Image& image, const std::string& path, const std::vector<std
         spec.channelnames = channelNames;
     }
     spec.attribute("compression", "zip");
+    // OpenImageIO stamps an EXR with the time it was written (capDate) unless told one: an empty
+    // one keeps a bake's files the same bytes from run to run.
+    spec.attribute("DateTime", "");
     writeWith(path, spec, image.pixels.data());
 }
 

@@ -377,6 +377,38 @@ TEST_CASE("A bake is the same at 1 and 2 threads", "[bake]") {
     CHECK(one.voxels.radiance == two.voxels.radiance);
 }
 
+TEST_CASE("A bake's files are the same bytes at 1 and 2 threads, run after run", "[bake]") {
+    // nvpro's Cornell box: generated lightmap UVs (their orientations searched side by side),
+    // lightmap and image EXRs and PNGs, grids.vdb and scene.glb. Only bake.json's timings and
+    // peak memory may differ.
+    VL_SKIP_WITHOUT_SHARED();
+    const auto run = [&](int threads, const std::string& name) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+        BakeJob job = quickJob(sharedDir() + "/scenes/cornellbox-nvpro/cornellBox.gltf", fs::path(tempDir("bytes")) / name);
+        job.settings.outputs.images = true;
+        job.settings.outputs.grids = true;
+        const BakeReport report = runBake(job);
+        INFO(report.error);
+        REQUIRE(report.ok);
+        return fs::path(job.outputDir);
+    };
+    const fs::path one = run(1, "one"), two = run(2, "two"), again = run(2, "again");
+    const auto bytes = [](const fs::path& file) {
+        std::ifstream in(file, std::ios::binary);
+        return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    };
+    size_t files = 0;
+    for (const auto& entry : fs::directory_iterator(one)) {
+        const std::string name = entry.path().filename().string();
+        if (name == "bake.json") continue;
+        INFO(name);
+        ++files;
+        CHECK(bytes(entry.path()) == bytes(two / name));
+        CHECK(bytes(entry.path()) == bytes(again / name));
+    }
+    CHECK(files >= 12);  // lightmap ×5, image ×5, grids.vdb, scene.glb
+}
+
 TEST_CASE("A scene with no lights and no emitters bakes to black with a warning", "[bake]") {
     Scene scene = twoRooms(0.1f);
     scene.lights.clear();
