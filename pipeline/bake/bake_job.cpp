@@ -227,6 +227,7 @@ void addJobLightsAndCameras(const BakeJob& job, Scene& scene) {
 Scene loadJobScene(const BakeJob& job) {
     LoadOptions options;
     options.strict = job.settings.strict;
+    options.filesOutsideScene = job.settings.filesOutsideScene;
     Scene scene = loadGltf(job.scenePath, options);
     addJobLightsAndCameras(job, scene);
     return scene;

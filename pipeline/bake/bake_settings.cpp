@@ -113,6 +113,10 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.generateLightmapUvs = parseBoolSetting("lightmap-uvs", v); }},
         {"gltf", "write scene.glb, the scene with its lightmaps attached (MOZ_lightmap, RGBM PNG) (default true)",
          [](S& s, const std::string& v) { s.outputs.gltf = parseBoolSetting("gltf", v); }},
+        // Input
+        {"files-outside-scene",
+         "read buffers and images whose glTF uri leaves the scene's folder (../, absolute paths, links out) (default false)",
+         [](S& s, const std::string& v) { s.filesOutsideScene = parseBoolSetting("files-outside-scene", v); }},
         // Device
         {"device", "cpu, cuda or auto (the GPU when one is usable, else the CPU with a message) (default cpu)",
          [](S& s, const std::string& v) { s.device = cuda::parseDeviceChoice(v); }},
@@ -175,6 +179,7 @@ std::string describeBakeSettings(const BakeSettings& s) {
             << s.lighting.attenuation->quadratic;
     if (s.device != cuda::DeviceChoice::Cpu) out << ", device=" << cuda::toString(s.device);
     if (!s.generateLightmapUvs) out << ", lightmap-uvs=false";
+    if (s.filesOutsideScene) out << ", files-outside-scene=true";
     for (size_t g = 0; g < s.lightmap.atlases.size(); ++g) {
         const AtlasGroup& group = s.lightmap.atlases[g];
         out << (g == 0 ? ", atlases=" : "; ") << group.name << ":";

@@ -94,6 +94,7 @@ struct BakeSettings {
     // TEXCOORD_1 for scenes that have none (unwrap/lightmap_uvs.h; bake.cpp needsLightmapUvs).
     bool generateLightmapUvs = true;
     bool strict = false;  // every warning is an error
+    bool filesOutsideScene = false;  // read uris that leave the scene's folder (LoadOptions)
     bool quiet = false;   // no progress on stderr
     // [added by cuda] Where voxel lighting and receiver shading run (cuda/device_choice.h);
     // cpu by default, so a bake's bytes do not depend on the machine.

@@ -355,7 +355,7 @@ void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Sour
                     std::to_string(meshes.size()) + " meshes");
     tinygltf::Model model;
     gltf::EncodedImages encoded;
-    readGltfModel(source, model, encoded);
+    readGltfModel(source, model, encoded, /*filesOutsideScene=*/true);  // the bake read it first, under its setting
 
     BinaryBuffer bin;
     packBuffers(model, encoded, bin, source, diagnostics);

@@ -105,11 +105,40 @@ std::string percentDecoded(const std::string& uri) {
     return out;
 }
 
+// Where a uri (of `element`, e.g. "buffer 0") may point: data: URIs, and files in the scene's
+// folder or below it, where a link does not lead out; beyond that only when allowed. Other
+// schemes are refused always: tinygltf would read "file:///x" as a relative path.
+void checkUri(const std::string& path, const std::string& element, const std::string& uri, bool filesOutsideScene) {
+    if (uri.rfind("data:", 0) == 0) return;
+    const auto colon = uri.find(':');
+    const auto firstSlash = uri.find('/');
+    if (colon != std::string::npos && colon > 0 && (firstSlash == std::string::npos || colon < firstSlash) &&
+        std::isalpha(static_cast<unsigned char>(uri[0])) &&
+        uri.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789+-.") >= colon)
+        throw InputError(path + ": " + element + " ('" + uri + "') is a '" + uri.substr(0, colon) +
+                         ":' URI: only data: URIs and files beside the scene are read");
+    namespace fs = std::filesystem;
+    const fs::path relative = percentDecoded(uri);
+    if (relative.is_absolute())  // tinygltf reads uris relative to the file's folder only
+        throw InputError(path + ": " + element + " ('" + uri + "') is an absolute path, which is not read: " +
+                         "give it relative to the scene's folder" +
+                         (filesOutsideScene ? "" : " (one leading out of it needs files-outside-scene=true)"));
+    if (filesOutsideScene) return;
+    std::error_code ec;
+    const fs::path folder = fs::weakly_canonical(fs::absolute(fs::path(path)).parent_path(), ec);
+    const fs::path target = fs::weakly_canonical(folder / relative, ec);
+    const auto [folderEnd, targetAt] = std::mismatch(folder.begin(), folder.end(), target.begin(), target.end());
+    if (ec || folderEnd != folder.end())
+        throw InputError(path + ": " + element + " ('" + uri + "') lies outside the scene's folder (" +
+                         target.string() + "): refused, so a scene cannot read other files of the machine; "
+                         "files-outside-scene=true reads it");
+}
+
 // The same checks on the raw JSON, before tinygltf parses the rest: a file that needs an
 // unsupported extension is refused for that reason, not for the parts tinygltf cannot read
 // because of it (a Draco-compressed accessor has no bufferView). Anything unreadable here is
 // left for tinygltf to report.
-void precheckJson(const std::string& path) {
+void precheckJson(const std::string& path, bool filesOutsideScene) {
     std::ifstream in(path, std::ios::binary);
     std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     const char* begin = bytes.data();
@@ -139,6 +168,14 @@ void precheckJson(const std::string& path) {
             if (name.is_string()) required.push_back(name.get<std::string>());
     checkVersionAndExtensions(path, version->get<std::string>(), minVersion, required);
 
+    if (const auto images = json.find("images"); images != json.end() && images->is_array())
+        for (size_t i = 0; i < images->size(); ++i) {
+            const auto& image = (*images)[i];
+            if (!image.is_object()) continue;
+            const auto uri = image.find("uri");
+            if (uri != image.end() && uri->is_string())
+                checkUri(path, "image " + std::to_string(i), uri->get<std::string>(), filesOutsideScene);
+        }
     // tinygltf reports a missing .bin as a bare "File not found"; say which buffer it is.
     const auto buffers = json.find("buffers");
     if (buffers == json.end() || !buffers->is_array()) return;
@@ -148,6 +185,7 @@ void precheckJson(const std::string& path) {
         const auto uri = buffer.find("uri");
         if (uri == buffer.end() || !uri->is_string()) continue;
         const std::string text = uri->get<std::string>();
+        checkUri(path, "buffer " + std::to_string(b), text, filesOutsideScene);
         if (text.rfind("data:", 0) == 0) continue;
         const std::filesystem::path file = std::filesystem::path(path).parent_path() / percentDecoded(text);
         std::error_code ec;
@@ -814,11 +852,12 @@ bool startsWithGlbMagic(const std::string& path) {
 
 const std::vector<std::string>& supportedGltfExtensions() { return kSupportedExtensions; }
 
-void readGltfModel(const std::string& path, tinygltf::Model& model, gltf::EncodedImages& encoded) {
+void readGltfModel(const std::string& path, tinygltf::Model& model, gltf::EncodedImages& encoded,
+                   bool filesOutsideScene) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": no such file");
 
-    precheckJson(path);
+    precheckJson(path, filesOutsideScene);
 
     std::string err, warn;
     bool ok = false;
@@ -841,7 +880,7 @@ void readGltfModel(const std::string& path, tinygltf::Model& model, gltf::Encode
 Scene loadGltf(const std::string& path, const LoadOptions& options) {
     tinygltf::Model model;
     gltf::EncodedImages encoded;
-    readGltfModel(path, model, encoded);
+    readGltfModel(path, model, encoded, options.filesOutsideScene);
 
     Scene scene;
     scene.sourcePath = path;

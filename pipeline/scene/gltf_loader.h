@@ -21,6 +21,11 @@ namespace vl {
 struct LoadOptions {
     bool strict = false;        // every warning becomes an error
     bool echoWarnings = true;   // print warnings to stderr as they are raised
+    // Read buffers and images whose uri leaves the scene's folder (`../`, an absolute path, a
+    // link leading out). Off: such a scene is refused, naming the uri, so a downloaded scene
+    // cannot read other files of the machine into a texture. data: URIs and files in the
+    // scene's folder (or below it) load either way; other schemes (file:, http:) never do.
+    bool filesOutsideScene = false;
 };
 
 Scene loadGltf(const std::string& path, const LoadOptions& options = {});

@@ -11,7 +11,9 @@
 namespace vl {
 
 // Parses `path` (.gltf or .glb) as loadGltf does, after the same checks (InputError naming
-// the file); every uri image's bytes are kept in `encoded`, none is decoded.
-void readGltfModel(const std::string& path, tinygltf::Model& model, gltf::EncodedImages& encoded);
+// the file; LoadOptions::filesOutsideScene says whether uris may leave its folder); every uri
+// image's bytes are kept in `encoded`, none is decoded.
+void readGltfModel(const std::string& path, tinygltf::Model& model, gltf::EncodedImages& encoded,
+                   bool filesOutsideScene = false);
 
 }  // namespace vl
