@@ -7,7 +7,8 @@ packages=(build-essential cmake ninja-build
   python3-openvdb libbenchmark-dev libembree-dev
   gnuplot-nox  # voxlight bench draws its plot with gnuplot; the optional Cycles peer needs blender
   nodejs  # runs the Khronos glTF validator (tools/gltf-validator) on every scene.glb in the tests
-  chromium)  # voxlight view --screenshot, and the test of the viewer page in a real browser
+  chromium  # voxlight view --screenshot, and the test of the viewer page in a real browser
+  clang libfuzzer-14-dev)  # tools/sanitize.sh and tools/fuzz.sh (ASan, UBSan, TSan, libFuzzer), which CI runs
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

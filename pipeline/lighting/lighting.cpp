@@ -60,8 +60,9 @@ void validateSettings(const Scene& scene, const LightingSettings& settings) {
     if (settings.threads < 0)
         throw SettingsError("lighting: threads " + std::to_string(settings.threads) + " must be 0 (all) or more");
     if (settings.attenuation) validateCoefficients(*settings.attenuation, "lighting: attenuation");
-    for (const auto& [name, k] : settings.lightAttenuation) {
-        validateCoefficients(k, "lighting: attenuation of light '" + name + "'");
+    for (const auto& entry : settings.lightAttenuation) {
+        const std::string& name = entry.first;  // a structured binding cannot be captured before C++20 (clang)
+        validateCoefficients(entry.second, "lighting: attenuation of light '" + name + "'");
         const bool known = std::any_of(scene.lights.begin(), scene.lights.end(),
                                        [&](const Light& light) { return light.name == name; });
         if (!known)

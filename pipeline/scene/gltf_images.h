@@ -26,6 +26,14 @@ bool keepEncodedImage(tinygltf::Image* image, int imageIndex, std::string* err, 
 // "image 3 ('wood.png')": how messages name an image.
 std::string imageName(const tinygltf::Model& model, int imageIndex);
 
+// Textures larger than this are refused (a warning), not decoded: one of 8192² is 1 GB as
+// float RGBA.
+constexpr uint64_t kMaxTextureTexels = uint64_t(8192) * 8192;
+
+// Why encoded image bytes are not decoded, or "": PNG and JPEG only (glTF's formats), every
+// PNG chunk and JPEG segment within the bytes, the size claimed within kMaxTextureTexels.
+std::string encodedImageProblem(const unsigned char* bytes, size_t size);
+
 // Decodes image `imageIndex` to RGBA float, RGB sRGB-decoded to linear (colour textures),
 // alpha linear. Returns an empty Image and sets `problem` when the image is missing or cannot
 // be decoded. Throws InputError (via the buffer-view checks) for a malformed bufferView.

@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# libFuzzer on the readers of files from anywhere (tools/fuzz/), built with clang, ASan and
+# UBSan into build-asan/.
+#
+#   tools/fuzz.sh build                   configure and build the targets
+#   tools/fuzz.sh run TARGET SECONDS      fuzz one target, growing build-asan/corpus/TARGET
+#                                         from tools/fuzz/corpus/TARGET; findings land in
+#                                         build-asan/findings/TARGET/
+#   tools/fuzz.sh minimise TARGET         merge build-asan/corpus/TARGET into the committed
+#                                         corpus, smallest inputs that keep its coverage
+#   tools/fuzz.sh replay                  every committed input of every target once (CI)
+#
+# Targets: fuzz_gltf fuzz_glb fuzz_image fuzz_job_file fuzz_vdb. Limits: 10 s an input
+# (a hang), 2 GB resident, and no single allocation over 1 GB (an input claiming a huge size
+# must be refused before it is allocated).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+targets=(fuzz_gltf fuzz_glb fuzz_image fuzz_job_file fuzz_vdb)
+limits=(-timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=1024)
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:allocator_may_return_null=0}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+
+case "${1:-}" in
+  build)
+    cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
+      -DVOXLIGHT_FUZZ=ON -DVOXLIGHT_SANITIZE=address,undefined \
+      -DVOXLIGHT_BENCHMARKS=OFF -DVOXLIGHT_CUDA=OFF
+    cmake --build build-asan --target "${targets[@]}" ;;
+  run)
+    target=$2 seconds=$3
+    mkdir -p "build-asan/corpus/$target" "build-asan/findings/$target"
+    "build-asan/fuzz/$target" "${limits[@]}" -max_total_time="$seconds" -print_final_stats=1 \
+      -artifact_prefix="build-asan/findings/$target/" "build-asan/corpus/$target" "tools/fuzz/corpus/$target" ;;
+  minimise)
+    target=$2
+    mkdir -p "build-asan/merged/$target"
+    rm -rf "build-asan/merged/$target"/*
+    "build-asan/fuzz/$target" "${limits[@]}" -merge=1 "build-asan/merged/$target" \
+      "tools/fuzz/corpus/$target" "build-asan/corpus/$target"
+    rm -rf "tools/fuzz/corpus/$target"
+    cp -r "build-asan/merged/$target" "tools/fuzz/corpus/$target" ;;
+  replay)
+    for target in "${targets[@]}"; do
+      echo "replaying tools/fuzz/corpus/$target ($(ls "tools/fuzz/corpus/$target" | wc -l) inputs)"
+      "build-asan/fuzz/$target" "${limits[@]}" -runs=0 "tools/fuzz/corpus/$target"
+    done ;;
+  *)
+    sed -n '2,16p' "$0"; exit 2 ;;
+esac
