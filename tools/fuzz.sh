@@ -22,6 +22,7 @@ export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 
 case "${1:-}" in
   build)
+    tools/install-deps.sh sanitizers
     cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
       -DVOXLIGHT_FUZZ=ON -DVOXLIGHT_SANITIZE=address,undefined \
       -DVOXLIGHT_BENCHMARKS=OFF -DVOXLIGHT_CUDA=OFF

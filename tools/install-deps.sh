@@ -7,8 +7,10 @@ packages=(build-essential cmake ninja-build
   python3-openvdb libbenchmark-dev libembree-dev
   gnuplot-nox  # voxlight bench draws its plot with gnuplot; the optional Cycles peer needs blender
   nodejs  # runs the Khronos glTF validator (tools/gltf-validator) on every scene.glb in the tests
-  chromium  # voxlight view --screenshot, and the test of the viewer page in a real browser
-  clang libfuzzer-14-dev)  # tools/sanitize.sh and tools/fuzz.sh (ASan, UBSan, TSan, libFuzzer), which CI runs
+  chromium)  # voxlight view --screenshot, and the test of the viewer page in a real browser
+# `tools/install-deps.sh sanitizers` (tools/sanitize.sh and tools/fuzz.sh call it; CI runs them):
+# clang with its sanitizers and libFuzzer as well.
+if [ "${1:-}" = sanitizers ]; then packages+=(clang libfuzzer-14-dev); fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

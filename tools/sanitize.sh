@@ -12,6 +12,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 mode=${1:-address}
 shift || true
+tools/install-deps.sh sanitizers
 common=(-G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DVOXLIGHT_BENCHMARKS=OFF -DVOXLIGHT_CUDA=OFF)
 case "$mode" in
   address)
