@@ -19,6 +19,7 @@ case "$mode" in
     dir=build-asan
     cmake -S . -B "$dir" "${common[@]}" -DVOXLIGHT_SANITIZE=address,undefined -DVOXLIGHT_FUZZ=ON
     export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1}
+    export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/tools/lsan.supp}
     export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1} ;;
   thread)
     dir=build-tsan
