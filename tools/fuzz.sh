@@ -7,7 +7,8 @@
 #                                         from tools/fuzz/corpus/TARGET; findings land in
 #                                         build-asan/findings/TARGET/
 #   tools/fuzz.sh minimise TARGET         merge build-asan/corpus/TARGET into the committed
-#                                         corpus, smallest inputs that keep its coverage
+#                                         corpus, smallest inputs that keep its coverage, each
+#                                         cut to 6000 bytes (the corpora stay under 2 MB)
 #   tools/fuzz.sh replay                  every committed input of every target once (CI)
 #
 # Targets: fuzz_gltf fuzz_glb fuzz_image fuzz_job_file fuzz_vdb. Limits: 10 s an input
@@ -39,7 +40,7 @@ case "${1:-}" in
     target=$2
     mkdir -p "build-asan/merged/$target"
     rm -rf "build-asan/merged/$target"/*
-    "build-asan/fuzz/$target" "${limits[@]}" -merge=1 "build-asan/merged/$target" \
+    "build-asan/fuzz/$target" "${limits[@]}" -max_len=6000 -merge=1 "build-asan/merged/$target" \
       "tools/fuzz/corpus/$target" "build-asan/corpus/$target"
     rm -rf "tools/fuzz/corpus/$target"
     cp -r "build-asan/merged/$target" "tools/fuzz/corpus/$target" ;;
