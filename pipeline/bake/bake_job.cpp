@@ -15,6 +15,11 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <cerrno>
+#include <cstring>
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -106,12 +111,70 @@ nlohmann::json reportJson(const BakeReport& report, const BakeSettings& settings
     return json;
 }
 
-// Moves every staged file into the output folder (each rename atomic), then drops the
-// staging folder.
+// Moves every staged file into the output folder (each rename atomic), bake.json last, then
+// drops the staging folder: a process killed meanwhile leaves finished files only, and a
+// bake.json only beside a whole bake's files.
 void publish(const fs::path& staging, const fs::path& target) {
     fs::create_directories(target);
-    for (const auto& entry : fs::directory_iterator(staging)) fs::rename(entry.path(), target / entry.path().filename());
+    for (const auto& entry : fs::directory_iterator(staging))
+        if (entry.path().filename() != "bake.json") fs::rename(entry.path(), target / entry.path().filename());
+    if (fs::exists(staging / "bake.json")) {
+        fs::remove(target / "bake.json");  // the old report goes first: it would describe files no longer there
+        fs::rename(staging / "bake.json", target / "bake.json");
+    }
     fs::remove(staging);
+}
+
+// One bake at a time writes an output folder: an exclusive lock on <folder>.lock, which the
+// system drops when its holder exits, however it exits (kill -9 included). A second bake of
+// the same folder is refused, naming the first's process.
+class OutputLock {
+public:
+    explicit OutputLock(const fs::path& target) : path_(target.string() + ".lock") {
+        if (!target.parent_path().empty()) fs::create_directories(target.parent_path());
+        // The holder removes the file when it ends: a lock taken on a file already removed
+        // (opened just before) is taken again on the file now there.
+        for (int attempt = 0;; ++attempt) {
+            fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+            if (fd_ < 0) throw Error("cannot open " + path_ + ": " + std::strerror(errno));
+            if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+                char holder[32] = {0};
+                const ssize_t n = ::pread(fd_, holder, sizeof holder - 1, 0);
+                ::close(fd_);
+                throw Error(target.string() + " is being written by another voxlight bake (process " +
+                            (n > 0 ? std::string(holder, size_t(n)) : std::string("?")) +
+                            "): wait for it to finish, or bake into another folder");
+            }
+            struct stat locked{}, named{};
+            if (::fstat(fd_, &locked) == 0 && ::stat(path_.c_str(), &named) == 0 && locked.st_ino == named.st_ino &&
+                locked.st_dev == named.st_dev)
+                break;
+            ::close(fd_);
+            if (attempt == 10) throw Error("cannot lock " + path_ + ": it keeps being replaced");
+        }
+        const std::string pid = std::to_string(::getpid());
+        if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, pid.data(), pid.size(), 0) < 0) {}  // the pid is for messages only
+    }
+    ~OutputLock() {
+        ::unlink(path_.c_str());  // while still held: no other bake can have it now
+        ::close(fd_);
+    }
+    OutputLock(const OutputLock&) = delete;
+    OutputLock& operator=(const OutputLock&) = delete;
+
+private:
+    std::string path_;
+    int fd_ = -1;
+};
+
+// Staging folders of bakes of `target` that died (kill -9, power loss): with the lock held no
+// live bake owns one.
+void removeDeadStaging(const fs::path& target) {
+    const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+    const std::string prefix = target.filename().string() + ".partial-";
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(parent, ec))
+        if (entry.path().filename().string().rfind(prefix, 0) == 0) fs::remove_all(entry.path(), ec);
 }
 
 void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& staging) {
@@ -196,7 +259,8 @@ BakeReport runBake(const BakeJob& job) {
     const fs::path target(job.outputDir);
     const fs::path staging = target.parent_path() / (target.filename().string() + ".partial-" + std::to_string(getpid()));
     try {
-        fs::remove_all(staging);
+        const OutputLock lock(target);
+        removeDeadStaging(target);
         fs::create_directories(staging);
         bakeToFolder(job, report, staging);
         publish(staging, target);
