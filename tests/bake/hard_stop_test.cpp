@@ -8,12 +8,15 @@
 
 #include <chrono>
 #include <csignal>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <map>
 #include <random>
+#include <sys/mount.h>
 #include <sys/wait.h>
 #include <thread>
 #include <unistd.h>
@@ -158,4 +161,40 @@ TEST_CASE("A second bake of an output folder that one is writing is refused, nam
     CHECK(fs::exists(output / "image.exr"));  // the first's bake, whole
     CHECK(fs::exists(output / "bake.json"));
     CHECK_FALSE(fs::exists(root / "box.lock"));
+}
+
+TEST_CASE("A disk that fills during a bake gives an error naming the file and keeps the finished scenes", "[bake]") {
+    if (!fs::exists(kVoxlight)) VL_SKIP(kVoxlight << " is not built");
+    const fs::path root = vl::test::tempDir("full-disk");
+    fs::remove_all(root);
+    fs::create_directories(root / "disk");
+    const std::string settings = R"("resolution": 32, "lightmap-res": 64, "width": 64, "height": 64)";
+    // One scene's outputs, to size the disk: room for it and half another.
+    const std::string sizing = writeJob(root / "sizing", root / "sized", settings);
+    REQUIRE(waitFor(startBake({"bake", sizing}, root / "sizing.log")) == 0);
+    size_t sceneBytes = 0;
+    for (const auto& [name, bytes] : filesBelow(root / "sized" / "first")) sceneBytes += bytes.size() + 4096;
+    const std::string size = std::to_string((sceneBytes * 3 / 2 / 4096 + 1) * 4096);
+    if (::mount("tmpfs", (root / "disk").c_str(), "tmpfs", 0, ("size=" + size).c_str()) != 0)
+        VL_SKIP("cannot mount a small tmpfs here (" << std::strerror(errno) << "): it needs root");
+    struct Unmount {
+        fs::path at;
+        ~Unmount() { ::umount(at.c_str()); }
+    } unmount{root / "disk"};
+
+    const std::string job = writeJob(root / "job", root / "disk", settings);
+    const int status = waitFor(startBake({"bake", job}, root / "full.log"));
+    const std::string log = bytesOf(root / "full.log");
+    INFO(log);
+    CHECK(status != 0);
+    CHECK(log.find("cannot write " + (root / "disk").string()) != std::string::npos);
+    // The first scene is whole and the same as in the roomy bake; the others left nothing.
+    const std::map<std::string, std::string> kept = filesBelow(root / "disk");
+    const std::map<std::string, std::string> first = filesBelow(root / "sized" / "first");
+    for (const auto& [name, bytes] : first) {
+        INFO(name);
+        REQUIRE(kept.count("first/" + name) == 1);
+        CHECK(kept.at("first/" + name) == bytes);
+    }
+    CHECK(kept.size() == first.size());  // no partial scene, no staging folder, no lock
 }
