@@ -238,7 +238,9 @@ std::vector<std::string> ViewServer::pageMessages() const {
 bool ViewServer::serve(double timeoutSeconds) {
     using Clock = std::chrono::steady_clock;
     const auto deadline = Clock::now() + std::chrono::duration<double>(timeoutSeconds);
-    std::vector<std::thread> connections;
+    // One detached thread a connection (a browser keeps several open); serve() returns once the
+    // last has answered, so none outlives the server.
+    std::atomic<int> open{0};
     while (!stopping_ && !captured_ && (timeoutSeconds <= 0.0 || Clock::now() < deadline)) {
         pollfd waiting{listener_, POLLIN, 0};
         if (::poll(&waiting, 1, 100) <= 0) continue;
@@ -246,12 +248,14 @@ bool ViewServer::serve(double timeoutSeconds) {
         if (connection < 0) continue;
         const timeval receiveTimeout{kReceiveTimeoutSeconds, 0};
         ::setsockopt(connection, SOL_SOCKET, SO_RCVTIMEO, &receiveTimeout, sizeof receiveTimeout);
-        connections.emplace_back([this, connection] {
+        ++open;
+        std::thread([this, connection, &open] {
             answer(connection);
             ::close(connection);
-        });
+            --open;
+        }).detach();
     }
-    for (std::thread& connection : connections) connection.join();
+    while (open > 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
     return captured_;
 }
 
