@@ -7,6 +7,7 @@
 #include "bake/voxel_size.h"
 #include "cone/bounces.h"
 #include "core/error.h"
+#include "core/memory.h"
 #include "core/progress.h"
 #include "cuda/launchers.h"
 #include "lighting/lighting.h"
@@ -83,15 +84,6 @@ void checkLightAttenuationNames(const Scene& scene, const LightingSettings& ligh
 }
 
 }  // namespace
-
-double availableMemoryBytes() {
-    std::ifstream meminfo("/proc/meminfo");
-    std::string key, unit;
-    double kib = 0.0;
-    while (meminfo >> key >> kib >> unit)
-        if (key == "MemAvailable:") return kib * 1024.0;
-    return static_cast<double>(sysconf(_SC_AVPHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGESIZE));
-}
 
 double estimateBakeMemory(const Scene& scene, const BakeSettings& settings, double voxelSize) {
     // A voxel costs ~100 bytes of channels, as much again in voxelization fragments, and ~50

@@ -71,9 +71,8 @@ struct BakeResult {
 // carry positions (the grids' transform) keep it where it was in world space.
 BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnostics);
 
-// What the machine has free now (/proc/meminfo MemAvailable), and what a bake of `scene`
-// with `settings` at `voxelSize` is estimated to take: voxels, receivers and images.
-double availableMemoryBytes();
+// What a bake of `scene` with `settings` at `voxelSize` is estimated to take: voxels,
+// receivers and images (against core/memory.h availableMemoryBytes).
 double estimateBakeMemory(const Scene& scene, const BakeSettings& settings, double voxelSize);
 
 // Refuses, before any work, a bake whose estimated memory exceeds what the machine has

@@ -2,6 +2,7 @@
 
 #include "bake/bake.h"
 #include "core/error.h"
+#include "core/memory.h"
 #include "core/math.h"
 #include "voxel/voxelize.h"
 

@@ -2,6 +2,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/memory.h"
 #include "voxel/vdb_detail.h"
 
 #include <openvdb/openvdb.h>
@@ -234,12 +235,23 @@ void forEachActiveVoxel(const GridT& grid, F&& f) {
     }
 }
 
+// A file's active voxels are counted before any is read: a tile of 1024³ voxels takes a few
+// bytes in the file and would take 100 GB as VoxelScene channels (~100 bytes a voxel, as
+// bake.cpp estimates), and minutes to expand.
+constexpr openvdb::Index64 kMaxReadVoxels = openvdb::Index64(1) << 28;
+constexpr double kBytesPerReadVoxel = 100.0;
+
 template <typename GridT>
 std::vector<ivec3> sortedActiveCoords(const GridT& grid, const std::string& path) {
-    constexpr openvdb::Index64 kMaxVoxels = openvdb::Index64(1) << 31;
-    if (grid.activeVoxelCount() > kMaxVoxels)
-        throw InputError(path + ": grid '" + grid.getName() + "' has " + std::to_string(grid.activeVoxelCount()) +
-                         " active voxels, more than voxlight handles");
+    const openvdb::Index64 active = grid.activeVoxelCount();
+    const double bytes = double(active) * kBytesPerReadVoxel;
+    if (active > kMaxReadVoxels)
+        throw InputError(path + ": grid '" + grid.getName() + "' has " + std::to_string(active) +
+                         " active voxels, more than voxlight reads (" + std::to_string(kMaxReadVoxels) + ")");
+    if (bytes > availableMemoryBytes())
+        throw InputError(path + ": grid '" + grid.getName() + "' has " + std::to_string(active) +
+                         " active voxels: about " + std::to_string(int(bytes / double(1 << 30))) +
+                         " GiB to read, more than this machine has free");
     std::vector<ivec3> coords;
     coords.reserve(grid.activeVoxelCount());
     forEachActiveVoxel(grid, [&](const Coord& c, const auto&) { coords.emplace_back(c.x(), c.y(), c.z()); });
