@@ -75,6 +75,8 @@ std::map<std::string, const GridInfo*> byName(const VdbFileInfo& info) {
     for (const GridInfo& g : info.grids) out[g.name] = &g;
     return out;
 }
+// Pointers into a temporary would dangle (ASan found two such uses): keep the info alive.
+std::map<std::string, const GridInfo*> byName(VdbFileInfo&&) = delete;
 
 std::string metaValue(const VdbFileInfo& info, const std::string& key) {
     for (const auto& [k, v] : info.metadata)
@@ -166,7 +168,8 @@ TEST_CASE("Optional channels are not written when absent and read back empty", "
     const VoxelScene scene = syntheticScene(false);
     const std::string path = test::tempDir("vdb_file") + "/no_optional.vdb";
     writeVoxelFile(scene, path);
-    const auto grids = byName(inspectVoxelFile(path));
+    const VdbFileInfo info = inspectVoxelFile(path);
+    const auto grids = byName(info);
     CHECK(grids.count("emission") == 0);
     CHECK(grids.count("radiance") == 0);
     CHECK(grids.count("occlusion") == 0);
@@ -214,7 +217,8 @@ TEST_CASE("Extra grids keep their own voxel size and values", "[voxel]") {
 
     // The scene itself is untouched by the extras.
     CHECK(readVoxelFile(path).coords == scene.coords);
-    const auto grids = byName(inspectVoxelFile(path));
+    const VdbFileInfo info = inspectVoxelFile(path);
+    const auto grids = byName(info);
     CHECK(grids.at("radiance_mip1")->voxelSize[1] == scene.voxelSize * 2.0);
 }
 
