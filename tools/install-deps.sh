@@ -9,9 +9,10 @@ packages=(build-essential cmake ninja-build
   nodejs  # runs the Khronos glTF validator (tools/gltf-validator) on every scene.glb in the tests
   chromium)  # voxlight view --screenshot, and the test of the viewer page in a real browser
 # `tools/install-deps.sh sanitizers` (tools/sanitize.sh and tools/fuzz.sh call it; CI runs them):
-# clang with its sanitizer runtimes (libclang-rt-14-dev: clang alone does not pull them) and
-# libFuzzer as well.
-if [ "${1:-}" = sanitizers ]; then packages+=(clang libclang-rt-14-dev libfuzzer-14-dev); fi
+# clang with its sanitizer runtimes (libclang-rt-14-dev: clang alone does not pull them),
+# libFuzzer, and llvm-14's llvm-symbolizer (reports name functions, and tools/lsan.supp
+# matches by name: without it the suppressions match nothing).
+if [ "${1:-}" = sanitizers ]; then packages+=(clang libclang-rt-14-dev libfuzzer-14-dev llvm-14); fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

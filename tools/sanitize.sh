@@ -13,6 +13,8 @@ cd "$(dirname "$0")/.."
 mode=${1:-address}
 shift || true
 tools/install-deps.sh sanitizers
+export ASAN_SYMBOLIZER_PATH=${ASAN_SYMBOLIZER_PATH:-/usr/lib/llvm-14/bin/llvm-symbolizer}
+export UBSAN_SYMBOLIZER_PATH=${UBSAN_SYMBOLIZER_PATH:-$ASAN_SYMBOLIZER_PATH}
 common=(-G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DVOXLIGHT_BENCHMARKS=OFF -DVOXLIGHT_CUDA=OFF)
 case "$mode" in
   address)
