@@ -153,7 +153,8 @@ public:
             if (attempt == 10) throw Error("cannot lock " + path_ + ": it keeps being replaced");
         }
         const std::string pid = std::to_string(::getpid());
-        if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, pid.data(), pid.size(), 0) < 0) {}  // the pid is for messages only
+        // The pid is for the refused bake's message only: a failed write leaves it "?".
+        if (::ftruncate(fd_, 0) == 0) (void)!::pwrite(fd_, pid.data(), pid.size(), 0);
     }
     ~OutputLock() {
         ::unlink(path_.c_str());  // while still held: no other bake can have it now
