@@ -3,9 +3,10 @@
 # UBSan into build-asan/.
 #
 #   tools/fuzz.sh build                   configure and build the targets
-#   tools/fuzz.sh run TARGET SECONDS      fuzz one target, growing build-asan/corpus/TARGET
+#   tools/fuzz.sh run TARGET SECONDS [FLAGS]
+#                                         fuzz one target, growing build-asan/corpus/TARGET
 #                                         from tools/fuzz/corpus/TARGET; findings land in
-#                                         build-asan/findings/TARGET/
+#                                         build-asan/findings/TARGET/; FLAGS go to libFuzzer
 #   tools/fuzz.sh minimise TARGET         merge build-asan/corpus/TARGET into the committed
 #                                         corpus, smallest inputs that keep its coverage, each
 #                                         cut to 6000 bytes (the corpora stay under 2 MB)
@@ -14,8 +15,8 @@
 # Targets: fuzz_gltf fuzz_glb fuzz_image fuzz_job_file fuzz_vdb. Limits: 10 s an input
 # (a hang), 2 GB resident, and no single allocation over 1 GB (an input claiming a huge size
 # must be refused before it is allocated). Leaks in libraries that cannot be fixed here are
-# listed, with reasons, in tools/lsan.supp; inputs that stop a target in a library are kept
-# in tools/fuzz/known/TARGET/ (README there), out of the replayed corpus.
+# listed, with reasons, in tools/lsan.supp. A length a library allocates before reading it
+# (OpenVDB's strings and compressed blocks) is capped by voxlight (core/allocation_limit.h).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 targets=(fuzz_gltf fuzz_glb fuzz_image fuzz_job_file fuzz_vdb)
@@ -35,9 +36,10 @@ case "${1:-}" in
     cmake --build build-asan --target "${targets[@]}" ;;
   run)
     target=$2 seconds=$3
+    shift 3
     mkdir -p "build-asan/corpus/$target" "build-asan/findings/$target"
     "build-asan/fuzz/$target" "${limits[@]}" -max_total_time="$seconds" -print_final_stats=1 \
-      -artifact_prefix="build-asan/findings/$target/" "build-asan/corpus/$target" "tools/fuzz/corpus/$target" ;;
+      -artifact_prefix="build-asan/findings/$target/" "$@" "build-asan/corpus/$target" "tools/fuzz/corpus/$target" ;;
   minimise)
     target=$2
     mkdir -p "build-asan/merged/$target"

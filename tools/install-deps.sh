@@ -2,7 +2,7 @@
 # Installs the Debian 12 packages voxlight builds with, when any is missing.
 set -euo pipefail
 packages=(build-essential cmake ninja-build
-  libopenvdb-dev libnanovdb-dev libboost-iostreams-dev zlib1g-dev libopenimageio-dev openimageio-tools libtinygltf-dev
+  libopenvdb-dev libnanovdb-dev libblosc-dev libboost-iostreams-dev zlib1g-dev libopenimageio-dev openimageio-tools libtinygltf-dev
   libglm-dev libtbb-dev catch2 libcli11-dev nlohmann-json3-dev
   python3-openvdb libbenchmark-dev libembree-dev
   gnuplot-nox  # voxlight bench draws its plot with gnuplot; the optional Cycles peer needs blender

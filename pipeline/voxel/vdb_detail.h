@@ -17,11 +17,12 @@ struct LoadedFile {
 
 // The grids of the file whose names are in `names` (absent ones are skipped: the caller
 // decides which are required), and the file-level metadata. InputError naming the file
-// when it is missing, not a VDB file, or unreadable.
+// when it is missing, not a VDB file, or unreadable, and when it claims more than it holds
+// (a count read past its end, a block longer than the file). The whole file is read.
 LoadedFile readGridsNamed(const std::string& path, const std::vector<std::string>& names);
 
-// Calls visit(grid) for every grid of the file, one at a time (only one grid is in memory at
-// once); returns the file-level metadata. Errors as readAllGrids.
+// Calls visit(grid) for every grid of the file; returns the file-level metadata. Errors as
+// readGridsNamed.
 openvdb::MetaMap::Ptr forEachGrid(const std::string& path,
                                   const std::function<void(const openvdb::GridBase&)>& visit);
 

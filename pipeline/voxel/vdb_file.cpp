@@ -1,10 +1,12 @@
 #include "voxel/vdb_file.h"
 
+#include "core/allocation_limit.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/memory.h"
 #include "voxel/vdb_detail.h"
 
+#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <tbb/parallel_for.h>
 
@@ -32,6 +34,12 @@ void initializeOpenVdb() {
     openvdb::initialize();
 }
 
+std::uintmax_t fileSizeOf(const std::string& path) {
+    std::error_code ec;
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    return ec ? 0 : size;
+}
+
 void requireReadableFile(const std::string& path) {
     namespace fs = std::filesystem;
     std::error_code ec;
@@ -40,23 +48,51 @@ void requireReadableFile(const std::string& path) {
     if (!fs::is_regular_file(status)) throw InputError(path + ": not a regular file");
 }
 
-std::string gridNamesOf(openvdb::io::File& file) {
+std::string gridNamesOf(const openvdb::GridPtrVec& grids) {
     std::string names;
-    for (auto it = file.beginName(); it != file.endName(); ++it) {
+    for (const openvdb::GridBase::Ptr& grid : grids) {
         if (!names.empty()) names += ", ";
-        names += "'" + *it + "'";
+        names += "'" + grid->getName() + "'";
     }
     return names.empty() ? std::string("none") : names;
 }
 
-// OpenVDB reports a non-VDB file as an IoError, a truncated one as anything from IoError to
-// std::bad_alloc (a garbage length); all of them mean the same to a user.
-template <typename F>
-auto guardedRead(const std::string& path, F&& read) {
+// The largest single allocation parsing `path` may need: no length the file claims can exceed
+// the file, and OpenVDB's largest fixed-size node (a 32³ internal node's table) is far below
+// the floor.
+std::size_t parseAllocationBound(const std::string& path) {
+    return std::max<std::size_t>(std::size_t(fileSizeOf(path)), std::size_t(64) << 20);
+}
+
+// Every grid of the file and its metadata, guarded against what a file can claim.
+// - OpenVDB's readers loop over counts read from the file and look at the stream only
+//   afterwards: a 10 kB file claiming 2^32 root tiles kept io::File reading past its end for
+//   13 s. Here the stream throws at its first failed read (io::Stream takes our stream; io::File
+//   opens its own).
+// - OpenVDB allocates the lengths it reads (a metadata string, a compressed block) before
+//   reading them: its calls run under an AllocationLimit of the file's size, so a length
+//   claimed beyond it is refused before it is allocated, and named.
+// Every other failure (not a VDB file, an unknown grid type, a corrupt block) is OpenVDB's
+// exception; all of them mean the same to a user.
+LoadedFile readWholeFile(const std::string& path) {
+    initializeOpenVdb();
+    requireReadableFile(path);
     try {
-        return read();
-    } catch (const Error&) {
-        throw;
+        const AllocationLimit limit(parseAllocationBound(path));
+        std::ifstream in(path, std::ios::binary);
+        in.exceptions(std::ios::failbit | std::ios::badbit);
+        openvdb::io::Stream stream(in, /*delayLoad=*/false);
+        LoadedFile loaded{stream.getGrids(), stream.getMetadata()};
+        if (!loaded.grids) loaded.grids = std::make_shared<openvdb::GridPtrVec>();
+        if (!loaded.metadata) loaded.metadata = std::make_shared<openvdb::MetaMap>();
+        return loaded;
+    } catch (const std::ios_base::failure&) {
+        throw InputError(path + ": not a readable OpenVDB file (it ends, or cannot be read, before its grids do)");
+    } catch (const std::bad_alloc& e) {
+        const std::size_t claimed = AllocationLimit::refusedBytes();
+        if (claimed == 0) throw InputError(path + ": not a readable OpenVDB file (" + e.what() + ")");
+        throw InputError(path + ": not a readable OpenVDB file (it claims a block of " + std::to_string(claimed) +
+                         " bytes in a file of " + std::to_string(fileSizeOf(path)) + " bytes)");
     } catch (const std::exception& e) {
         throw InputError(path + ": not a readable OpenVDB file (" + e.what() + ")");
     }
@@ -65,54 +101,30 @@ auto guardedRead(const std::string& path, F&& read) {
 }  // namespace
 
 LoadedFile readGridsNamed(const std::string& path, const std::vector<std::string>& names) {
-    initializeOpenVdb();
-    requireReadableFile(path);
-    return guardedRead(path, [&] {
-        openvdb::io::File file(path);
-        file.open(/*delayLoad=*/false);
-        LoadedFile loaded;
-        loaded.metadata = file.getMetadata();
-        if (!loaded.metadata) loaded.metadata = std::make_shared<openvdb::MetaMap>();
-        loaded.grids = std::make_shared<openvdb::GridPtrVec>();
-        for (const std::string& name : names)
-            if (file.hasGrid(name)) loaded.grids->push_back(file.readGrid(name));
-        file.close();
-        return loaded;
-    });
+    LoadedFile loaded = readWholeFile(path);
+    auto named = std::make_shared<openvdb::GridPtrVec>();
+    for (const std::string& name : names)
+        for (const openvdb::GridBase::Ptr& grid : *loaded.grids)
+            if (grid->getName() == name) {
+                named->push_back(grid);
+                break;
+            }
+    loaded.grids = named;
+    return loaded;
 }
 
 openvdb::MetaMap::Ptr forEachGrid(const std::string& path,
                                   const std::function<void(const openvdb::GridBase&)>& visit) {
-    initializeOpenVdb();
-    requireReadableFile(path);
-    return guardedRead(path, [&] {
-        openvdb::io::File file(path);
-        file.open(/*delayLoad=*/false);
-        openvdb::MetaMap::Ptr metadata = file.getMetadata();
-        if (!metadata) metadata = std::make_shared<openvdb::MetaMap>();
-        std::vector<std::string> names;
-        for (auto it = file.beginName(); it != file.endName(); ++it) names.push_back(*it);
-        for (const std::string& name : names) {
-            const openvdb::GridBase::ConstPtr grid = file.readGrid(name);
-            if (grid) visit(*grid);
-        }
-        file.close();
-        return metadata;
-    });
+    const LoadedFile loaded = readWholeFile(path);
+    for (const openvdb::GridBase::Ptr& grid : *loaded.grids) visit(*grid);
+    return loaded.metadata;
 }
 
 openvdb::GridBase::Ptr readGrid(const std::string& path, const std::string& gridName) {
-    initializeOpenVdb();
-    requireReadableFile(path);
-    return guardedRead(path, [&] {
-        openvdb::io::File file(path);
-        file.open(/*delayLoad=*/false);
-        if (!file.hasGrid(gridName))
-            throw InputError(path + ": no grid named '" + gridName + "' (the file has " + gridNamesOf(file) + ")");
-        openvdb::GridBase::Ptr grid = file.readGrid(gridName);
-        file.close();
-        return grid;
-    });
+    const LoadedFile loaded = readWholeFile(path);
+    for (const openvdb::GridBase::Ptr& grid : *loaded.grids)
+        if (grid->getName() == gridName) return grid;
+    throw InputError(path + ": no grid named '" + gridName + "' (the file has " + gridNamesOf(*loaded.grids) + ")");
 }
 
 }  // namespace vdb_detail

@@ -6,10 +6,12 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -99,8 +101,11 @@ TEST_CASE("A bake killed at any moment leaves finished files only, and the next 
     const std::string killedJob = writeJob(root / "k", root / "killed", settings);
     std::mt19937 random(15);
     std::uniform_real_distribution<double> moment(0.1 * seconds, 0.9 * seconds);
+    // Six kills in the suite; VOXLIGHT_HARD_STOP_KILLS=20 is issue 15's campaign.
+    const char* killsSetting = std::getenv("VOXLIGHT_HARD_STOP_KILLS");
+    const int kills = killsSetting ? std::max(1, std::atoi(killsSetting)) : 6;
     int interrupted = 0;
-    for (int kill = 0; kill < 6; ++kill) {
+    for (int kill = 0; kill < kills; ++kill) {
         const double after = moment(random);
         INFO("kill " << kill << " after " << after << " s of a " << seconds << " s bake");
         const pid_t bake = startBake({"bake", killedJob}, root / "killed.log");
@@ -125,7 +130,8 @@ TEST_CASE("A bake killed at any moment leaves finished files only, and the next 
         }
         interrupted += caughtWriting ? 1 : 0;
     }
-    CHECK(interrupted >= 2);  // the kills met bakes at work, not only before or after them
+    WARN(kills << " kills, " << interrupted << " of them during a bake's writing");
+    CHECK(interrupted >= std::min(2, kills));  // the kills met bakes at work, not only before or after them
     // The next run clears the dead runs' staging folders and completes.
     REQUIRE(waitFor(startBake({"bake", killedJob}, root / "killed.log")) == 0);
     const std::map<std::string, std::string> finished = filesBelow(root / "killed");

@@ -1,0 +1,34 @@
+// A cap on single allocations while a library parses a file from elsewhere. OpenVDB reads a
+// length from the file and allocates that much before reading the bytes (a metadata string is
+// even filled first): a 17 kB .vdb whose metadata claimed a 2.5 GB name took 12.6 GB and 67 s
+// before failing. No single allocation that parsing a file needs can be larger than the file
+// itself, give or take the largest fixed-size node, so a reader sets the cap to that bound for
+// the scope of the library's calls.
+//
+// Inside the scope, on the calling thread, the global operator new (replaced in
+// allocation_limit.cpp, otherwise malloc as libstdc++'s is) refuses any single allocation over
+// the cap with std::bad_alloc before asking for the memory; the reader reports the file as
+// unreadable, naming the size it claimed. Scopes nest (each restores the cap it replaced).
+#pragma once
+
+#include <cstddef>
+
+namespace vl {
+
+class AllocationLimit {
+public:
+    static constexpr std::size_t none = ~std::size_t(0);
+
+    explicit AllocationLimit(std::size_t largestBytes);
+    ~AllocationLimit();
+    AllocationLimit(const AllocationLimit&) = delete;
+    AllocationLimit& operator=(const AllocationLimit&) = delete;
+
+    // The size of the last allocation this thread refused (0: none since the scope began).
+    static std::size_t refusedBytes();
+
+private:
+    std::size_t previous_;
+};
+
+}  // namespace vl
