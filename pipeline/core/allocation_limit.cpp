@@ -42,6 +42,7 @@ std::size_t AllocationLimit::refusedBytes() { return lastRefused; }
 
 }  // namespace vl
 
+#if VL_ALLOCATION_LIMIT_ENFORCED
 // The replaceable global allocation functions ([new.delete]); the aligned forms keep
 // libstdc++'s own, which pair with each other.
 void* operator new(std::size_t size) { return allocate(size); }
@@ -54,3 +55,4 @@ void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
 void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
+#endif

@@ -5,6 +5,9 @@
 // itself, give or take the largest fixed-size node, so a reader sets the cap to that bound for
 // the scope of the library's calls.
 //
+// Not enforced under ThreadSanitizer, whose runtime defines operator new itself (strongly, so a
+// second definition does not link); ASan's runtime lets this one replace its own.
+//
 // Inside the scope, on the calling thread, the global operator new (replaced in
 // allocation_limit.cpp, otherwise malloc as libstdc++'s is) refuses any single allocation over
 // the cap with std::bad_alloc before asking for the memory; the reader reports the file as
@@ -13,11 +16,23 @@
 
 #include <cstddef>
 
+#if defined(__SANITIZE_THREAD__)
+#define VL_ALLOCATION_LIMIT_ENFORCED 0
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define VL_ALLOCATION_LIMIT_ENFORCED 0
+#endif
+#endif
+#ifndef VL_ALLOCATION_LIMIT_ENFORCED
+#define VL_ALLOCATION_LIMIT_ENFORCED 1
+#endif
+
 namespace vl {
 
 class AllocationLimit {
 public:
     static constexpr std::size_t none = ~std::size_t(0);
+    static constexpr bool enforced = VL_ALLOCATION_LIMIT_ENFORCED;
 
     explicit AllocationLimit(std::size_t largestBytes);
     ~AllocationLimit();
