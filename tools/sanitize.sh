@@ -3,7 +3,11 @@
 #
 #   tools/sanitize.sh address [ctest args]   ASan + UBSan (clang; with the fuzz targets of
 #                                            tools/fuzz.sh) in build-asan/
-#   tools/sanitize.sh thread  [ctest args]   TSan in build-tsan/
+#   tools/sanitize.sh thread  [ctest args]   TSan in build-tsan/, with oneTBB built with TSan
+#                                            from Debian's source of the installed version
+#                                            (build-tsan/onetbb/; Debian's libtbb is not
+#                                            instrumented, so every parallel_for would look
+#                                            like a race); tools/tsan.supp for the rest
 #
 # With no ctest arguments every test runs; e.g. `-R '^(scene|voxel):'` picks some (and
 # SANITIZE_TARGETS="test_scene test_voxel" builds only their programs). A finding
@@ -16,6 +20,27 @@ tools/install-deps.sh sanitizers
 export ASAN_SYMBOLIZER_PATH=${ASAN_SYMBOLIZER_PATH:-/usr/lib/llvm-14/bin/llvm-symbolizer}
 export UBSAN_SYMBOLIZER_PATH=${UBSAN_SYMBOLIZER_PATH:-$ASAN_SYMBOLIZER_PATH}
 common=(-G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ -DVOXLIGHT_BENCHMARKS=OFF -DVOXLIGHT_CUDA=OFF)
+# oneTBB 2021 from Debian's source package of the installed libtbb12, built with TSan, once.
+# The source comes through apt lists of this folder's own (deb-src beside the machine's deb
+# entries); the machine's apt configuration is left as it is.
+tsan_tbb() {
+  local dir=$PWD/build-tsan/onetbb apt
+  [ -f "$dir/lib/libtbb.so.12" ] && return
+  rm -rf "$dir" && mkdir -p "$dir/apt/parts" "$dir/apt/lists/partial" "$dir/src"
+  if [ -f /etc/apt/sources.list.d/debian.sources ]; then
+    sed 's/^Types: deb$/Types: deb-src/' /etc/apt/sources.list.d/debian.sources > "$dir/apt/parts/src.sources"
+  else
+    sed -n 's/^deb /deb-src /p' /etc/apt/sources.list > "$dir/apt/parts/src.list"
+  fi
+  apt=(-o Dir::Etc::SourceList=/dev/null -o Dir::Etc::SourceParts="$dir/apt/parts" -o Dir::State::Lists="$dir/apt/lists")
+  apt-get "${apt[@]}" update -qq
+  (cd "$dir/src" && apt-get "${apt[@]}" source --download-only "onetbb=$(dpkg-query -W -f='${Version}' libtbb12)")
+  tar xJf "$dir"/src/onetbb_*.orig.tar.xz -C "$dir/src"
+  cmake -S "$(ls -d "$dir"/src/oneTBB-*/)" -B "$dir/build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DTBB_SANITIZE=thread -DTBB_TEST=OFF -DTBB_EXAMPLES=OFF -DTBB_STRICT=OFF
+  cmake --build "$dir/build" --target tbb
+  mkdir -p "$dir/lib" && cp -a "$dir"/build/*/libtbb.so* "$dir/lib/"
+}
 case "$mode" in
   address)
     dir=build-asan
@@ -26,7 +51,9 @@ case "$mode" in
   thread)
     dir=build-tsan
     cmake -S . -B "$dir" "${common[@]}" -DVOXLIGHT_SANITIZE=thread
-    export TSAN_OPTIONS=${TSAN_OPTIONS:-halt_on_error=1:second_deadlock_stack=1} ;;
+    tsan_tbb
+    export LD_LIBRARY_PATH=$PWD/build-tsan/onetbb/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+    export TSAN_OPTIONS=${TSAN_OPTIONS:-halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tools/tsan.supp} ;;
   *)
     sed -n '2,9p' "$0"; exit 2 ;;
 esac
