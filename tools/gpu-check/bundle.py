@@ -14,7 +14,7 @@ library is copied instead; this repeats until every binary starts.
 
 writes OUT_DIR/libs.tar.xz (lib/) and OUT_DIR/bins.tar.xz (bin/).
 """
-import collections, os, re, shutil, subprocess, sys, tempfile
+import collections, functools, os, re, shutil, subprocess, sys, tempfile
 
 GLIBC = re.compile(r'^(libc|libm|libdl|libpthread|librt|ld-linux-x86-64)\.so')
 STUB_OVER_BYTES = 1_500_000  # direct dependencies of OpenImageIO larger than this start as stubs
@@ -22,14 +22,16 @@ KEEP_REAL = re.compile(r'^(libOpenImageIO|libtbb|libstdc\+\+|libgcc_s|libopenvdb
                        r'libtinygltf|libstb|libboost|libblosc|libz\.)')
 
 
-def run(*args, **kw):
-    return subprocess.run(args, capture_output=True, text=True, **kw).stdout
+@functools.lru_cache(maxsize=None)  # each stub reads every consumer's symbols: read each once
+def run(*args):
+    return subprocess.run(args, capture_output=True, text=True).stdout
 
 
 def needed(path):
     return re.findall(r'\(NEEDED\).*\[(.*)\]', run('readelf', '-d', path))
 
 
+@functools.lru_cache(maxsize=None)
 def dynsyms(path):
     rows = []
     for line in run('readelf', '--dyn-syms', '-W', path).splitlines():
@@ -55,10 +57,13 @@ def closure(binaries):
     return {n: (where[n], d) for n, d in depth.items()}
 
 
+@functools.lru_cache(maxsize=None)
+def imports(consumers):
+    return {s[3].split('@')[0] for c in consumers for s in dynsyms(c) if s[2] == 'UND'}
+
+
 def write_stub(name, real_path, consumers, lib_dir, src_dir):
-    imported = set()
-    for c in consumers:
-        imported |= {s[3].split('@')[0] for s in dynsyms(c) if s[2] == 'UND'}
+    imported = imports(tuple(consumers))
     by_version, src = collections.defaultdict(list), ['#include <stdlib.h>', '#include <unistd.h>']
     for i, (size, kind, section, full) in enumerate(dynsyms(real_path)):
         base, _, version = full.partition('@')
