@@ -9,7 +9,7 @@
 #                                         build-asan/findings/TARGET/; FLAGS go to libFuzzer
 #   tools/fuzz.sh minimise TARGET         merge build-asan/corpus/TARGET into the committed
 #                                         corpus, smallest inputs that keep its coverage, each
-#                                         cut to 6000 bytes (the corpora stay under 2 MB)
+#                                         cut to 6000 bytes (the corpora stay under 5 MB)
 #   tools/fuzz.sh replay                  every committed input of every target once (CI)
 #
 # Targets: fuzz_gltf fuzz_glb fuzz_image fuzz_job_file fuzz_vdb. Limits: 10 s an input

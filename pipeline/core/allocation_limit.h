@@ -1,6 +1,6 @@
 // A cap on single allocations while a library parses a file from elsewhere. OpenVDB reads a
 // length from the file and allocates that much before reading the bytes (a metadata string is
-// even filled first): a 17 kB .vdb whose metadata claimed a 2.5 GB name took 12.6 GB and 67 s
+// even filled first): a 10 kB .vdb whose metadata claimed a 2.5 GB name took 12.6 GB and 67 s
 // before failing. No single allocation that parsing a file needs can be larger than the file
 // itself, give or take the largest fixed-size node, so a reader sets the cap to that bound for
 // the scope of the library's calls.

@@ -57,6 +57,13 @@ std::string gridNamesOf(const openvdb::GridPtrVec& grids) {
     return names.empty() ? std::string("none") : names;
 }
 
+// The first grid called `name` (null: none).
+openvdb::GridBase::Ptr gridNamed(const openvdb::GridPtrVec& grids, const std::string& name) {
+    for (const openvdb::GridBase::Ptr& grid : grids)
+        if (grid->getName() == name) return grid;
+    return nullptr;
+}
+
 // The largest single allocation parsing `path` may need: no length the file claims can exceed
 // the file, and OpenVDB's largest fixed-size node (a 32³ internal node's table) is far below
 // the floor.
@@ -71,7 +78,7 @@ std::size_t parseAllocationBound(const std::string& path) {
 //   opens its own).
 // - OpenVDB allocates the lengths it reads (a metadata string, a compressed block) before
 //   reading them: its calls run under an AllocationLimit of the file's size, so a length
-//   claimed beyond it is refused before it is allocated, and named.
+//   claimed beyond it is refused before it is allocated, naming its size.
 // Every other failure (not a VDB file, an unknown grid type, a corrupt block) is OpenVDB's
 // exception; all of them mean the same to a user.
 LoadedFile readWholeFile(const std::string& path) {
@@ -104,11 +111,7 @@ LoadedFile readGridsNamed(const std::string& path, const std::vector<std::string
     LoadedFile loaded = readWholeFile(path);
     auto named = std::make_shared<openvdb::GridPtrVec>();
     for (const std::string& name : names)
-        for (const openvdb::GridBase::Ptr& grid : *loaded.grids)
-            if (grid->getName() == name) {
-                named->push_back(grid);
-                break;
-            }
+        if (openvdb::GridBase::Ptr grid = gridNamed(*loaded.grids, name)) named->push_back(grid);
     loaded.grids = named;
     return loaded;
 }
@@ -122,8 +125,7 @@ openvdb::MetaMap::Ptr forEachGrid(const std::string& path,
 
 openvdb::GridBase::Ptr readGrid(const std::string& path, const std::string& gridName) {
     const LoadedFile loaded = readWholeFile(path);
-    for (const openvdb::GridBase::Ptr& grid : *loaded.grids)
-        if (grid->getName() == gridName) return grid;
+    if (openvdb::GridBase::Ptr grid = gridNamed(*loaded.grids, gridName)) return grid;
     throw InputError(path + ": no grid named '" + gridName + "' (the file has " + gridNamesOf(*loaded.grids) + ")");
 }
 
