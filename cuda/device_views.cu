@@ -20,6 +20,7 @@ TraceSceneView uploadTraceScene(DeviceBuffers& owner, const TraceSceneView& host
     d.emitters = upload(owner, host.emitters, host.emitterCount);
     d.emitterCdf = upload(owner, host.emitterCdf, host.emitterCount);
     d.emitterSelectPdf = upload(owner, host.emitterSelectPdf, host.emitterSelectPdf ? host.triangleCount : 0);
+    d.emitterQuad = upload(owner, host.emitterQuad, host.emitterCount);
     return d;
 }
 

@@ -27,7 +27,7 @@ using lighting::EmitterSample;
 using lighting::EmitterTriangle;
 using lighting::KernelLight;
 
-// Salt of the emitter-sample jitter stream (Pcg32::forItem), distinct from other passes.
+// Salt of the textured emitters' sample jitter (Pcg32::forItem), distinct from other passes.
 constexpr uint64_t kEmitterJitterSalt = 0x4C49474854ull;  // "LIGHT"
 constexpr int kMaxEmitterStrata = 64;
 
@@ -155,8 +155,25 @@ struct Emitters {
     std::vector<EmitterSample> samples;
 };
 
-// n×n strata of the unit square, each jittered once per triangle (seeded by the triangle's
-// running number), mapped area-preservingly onto the triangle: every sample stands for A/n².
+// Whether triangles a and b of one uniform emitter are the two halves of a quad: two shared
+// corners and the fourth corner in a's plane (within a thousandth of a voxel; index space).
+bool halvesOfAQuad(const EmitterTriangle& a, const EmitterTriangle& b) {
+    const vec3 va[3] = {a.v0, a.v1, a.v2};
+    const vec3 vb[3] = {b.v0, b.v1, b.v2};
+    int shared = 0;
+    vec3 unshared(0.0f);
+    for (const vec3& q : vb) {
+        const bool inA = q == va[0] || q == va[1] || q == va[2];
+        shared += inA ? 1 : 0;
+        if (!inA) unshared = q;
+    }
+    return shared == 2 && glm::dot(a.normal, b.normal) > 0.9999f && std::abs(glm::dot(a.normal, unshared - a.v0)) < 1e-3f;
+}
+
+// The patches of every emissive mesh (lighting_kernels.h EmitterTriangle). A textured
+// patch gets its n×n samples here, each stratum jittered once (seeded by the triangle's
+// running number) where its texture is read: every sample stands for A/n² of the triangle.
+// Uniform patches are sampled per voxel in the kernel.
 Emitters emitterSamples(const Scene& scene, int strata, float h) {
     Emitters emitters;
     uint64_t triangleId = 0;
@@ -164,6 +181,14 @@ Emitters emitterSamples(const Scene& scene, int strata, float h) {
     for (const Mesh& mesh : scene.meshes) {
         const Material& material = scene.materialOf(mesh);
         if (!material.emissive()) continue;
+        const bool uniform = !material.emissiveTexture.valid();
+        if (uniform && !finite(material.emission()))
+            throw InputError(scene.sourcePath + ": mesh '" + mesh.name + "' has a non-finite emission");
+        if (uniform && !(maxComponent(material.emission()) > 0.0f)) {
+            triangleId += mesh.triangleCount();
+            continue;
+        }
+        std::vector<EmitterTriangle> triangles;
         for (size_t t = 0; t < mesh.triangleCount(); ++t, ++triangleId) {
             const vec3 p0 = mesh.positions[mesh.indices[3 * t]];
             const vec3 p1 = mesh.positions[mesh.indices[3 * t + 1]];
@@ -176,18 +201,29 @@ Emitters emitterSamples(const Scene& scene, int strata, float h) {
             tri.v1 = p1 / h;
             tri.v2 = p2 / h;
             tri.normal = cross / doubleArea;
-            tri.uniform = material.emissiveTexture.valid() ? 0 : 1;
+            tri.area = 0.5f * doubleArea;
+            tri.uniform = uniform ? 1 : 0;
             tri.radiance = material.emission();
             tri.doubleSided = material.doubleSided ? 1 : 0;
+            if (uniform) {
+                const bool secondHalf = !triangles.empty() && triangles.back().patchSize == 1 &&
+                                        halvesOfAQuad(triangles.back(), tri);
+                if (secondHalf) {
+                    triangles.back().patchSize = 2;
+                    tri.patchSize = 0;
+                }
+                triangles.push_back(tri);
+                continue;
+            }
             tri.firstSample = static_cast<uint32_t>(emitters.samples.size());
-            const float sampleArea = 0.5f * doubleArea * share;
+            const float sampleArea = tri.area * share;
             for (int sy = 0; sy < strata; ++sy) {
                 for (int sx = 0; sx < strata; ++sx) {
                     Pcg32 rng = Pcg32::forItem(triangleId, static_cast<uint64_t>(sy * strata + sx), kEmitterJitterSalt);
                     const float ux = (static_cast<float>(sx) + rng.next1D()) / static_cast<float>(strata);
                     const float uy = (static_cast<float>(sy) + rng.next1D()) / static_cast<float>(strata);
                     const vec2 b = sampleUniformTriangle(vec2(ux, uy));
-                    const vec3 Le = material.emissiveTexture.valid() ? emissionAt(scene, mesh, t, b) : material.emission();
+                    const vec3 Le = emissionAt(scene, mesh, t, b);
                     if (!finite(Le))
                         throw InputError(scene.sourcePath + ": mesh '" + mesh.name + "' triangle " + std::to_string(t) +
                                          " has a non-finite emission");
@@ -199,8 +235,9 @@ Emitters emitterSamples(const Scene& scene, int strata, float h) {
                 }
             }
             tri.sampleCount = static_cast<uint32_t>(emitters.samples.size()) - tri.firstSample;
-            if (tri.sampleCount > 0) emitters.triangles.push_back(tri);
+            if (tri.sampleCount > 0) triangles.push_back(tri);
         }
+        emitters.triangles.insert(emitters.triangles.end(), triangles.begin(), triangles.end());
     }
     return emitters;
 }
@@ -280,6 +317,7 @@ LightingStats lightVoxels(const Scene& scene, VoxelScene& voxels, const Lighting
     view.emitters = emitters.triangles.data();
     view.emitterCount = static_cast<uint32_t>(emitters.triangles.size());
     view.emitterSamples = emitters.samples.data();
+    view.emitterStrata = settings.emitterStrata;
     view.normalWeighting = kernelWeighting(settings.normalWeights);
     view.visibility = settings.visibility ? 1 : 0;
     const bool hierarchical = settings.traversal == VisibilityTraversal::Hdda;

@@ -55,14 +55,15 @@ struct LightingSettings {
     // every point and spot light. A light named in `lightAttenuation` uses its own K's.
     std::optional<AttenuationCoefficients> attenuation;
     std::map<std::string, AttenuationCoefficients> lightAttenuation;
-    // Each emissive triangle's visibility is sampled at n×n stratified points (fixed jitter per
-    // triangle); its unshadowed light is exact (Lambert's polygon formula), so the points only
-    // shape penumbrae. One suffices by default: the voxel light feeds only the bounces (the
-    // receivers' direct light is traced exactly), whose gather blurs penumbrae anyway. On the
-    // Cycles quad box n = 1, 2, 3 give lightmap 6.07%, 6.16%, 6.24% relative RMSE and take
-    // 0.12, 0.39, 0.83 s in the voxel light stage (2 cores; errors from `build/voxlight bench
-    // --methods vct --vct 'voxel-emitter-strata=N'`, times from the bake.json of `build/voxlight
-    // bake ../shared/reference/cornell_quad.gltf --voxel-emitter-strata N`).
+    // Each emissive patch (a quad's two halves, or a triangle: lighting_kernels.h) is seen
+    // through n×n stratified points of its own per voxel; its unshadowed light is exact
+    // (Lambert's polygon formula), so the points only shape penumbrae, and what they miss is
+    // noise from voxel to voxel that the bounces' gathers average. One suffices by default:
+    // on the Cycles quad box n = 1, 2 give lightmap 2.6%, 2.5% relative RMSE (indirect 5.2%,
+    // 4.9%) and take 0.043, 0.127 s in the voxel light stage (2 cores; errors from
+    // `build/voxlight bench --methods vct --vct '' --vct 'voxel-emitter-strata=2'`, times from
+    // the bake.json of `build/voxlight bake ../shared/reference/cornell_quad.gltf
+    // --voxel-emitter-strata N --images false`, fastest of 3).
     int emitterStrata = 1;
     // false: V = 0 everywhere (unshadowed lighting; the benchmark's "no stepping" peer).
     bool visibility = true;
@@ -74,7 +75,7 @@ struct LightingStats {
     uint64_t voxels = 0;
     uint64_t lights = 0;            // punctual lights
     uint64_t emitterTriangles = 0;  // emissive triangles with non-zero area
-    uint64_t emitterSamples = 0;
+    uint64_t emitterSamples = 0;     // fixed points on textured emitters (uniform ones: each voxel its own)
     uint64_t voxelLightEvaluations = 0;  // (voxel, light or emitter sample) pairs shaded
     uint64_t visibilitySteps = 0;        // voxels looked up plus empty nodes leapt over
     double seconds = 0.0;

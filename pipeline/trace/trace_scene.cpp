@@ -171,6 +171,32 @@ TraceScene TraceScene::build(const Scene& scene, const SceneTriangles& triangles
         out.emitters.push_back(static_cast<uint32_t>(t));
         weights.push_back(area * (m.emission.x + m.emission.y + m.emission.z) * (m.doubleSided ? 2.0 : 1.0));
     }
+    // Parallelogram quads: emitters k and k + 1 of one uniform material sharing an edge, the
+    // two corners they do not share summing to the two they do.
+    out.emitterQuad.assign(out.emitters.size(), kQuadSingle);
+    for (size_t k = 0; k + 1 < out.emitters.size(); ++k) {
+        if (out.emitterQuad[k] != kQuadSingle) continue;
+        const uint32_t a = out.emitters[k], b = out.emitters[k + 1];
+        const TraceMaterial& m = out.materials[out.materialIds[a]];
+        if (out.materialIds[b] != out.materialIds[a] || m.emissiveTexture.texture >= 0) continue;
+        const vec3* va = &out.vertices[3 * size_t(a)];
+        const vec3* vb = &out.vertices[3 * size_t(b)];
+        int shared = 0;
+        vec3 ownA(0.0f), ownB(0.0f), sharedSum(0.0f);
+        for (int i = 0; i < 3; ++i) {
+            const bool inB = va[i] == vb[0] || va[i] == vb[1] || va[i] == vb[2];
+            shared += inB ? 1 : 0;
+            if (inB) sharedSum += va[i]; else ownA = va[i];
+            if (!(vb[i] == va[0] || vb[i] == va[1] || vb[i] == va[2])) ownB = vb[i];
+        }
+        const float size = glm::length(va[1] - va[0]) + glm::length(va[2] - va[0]);
+        const vec3 na = glm::normalize(glm::cross(va[1] - va[0], va[2] - va[0]));
+        const vec3 nb = glm::normalize(glm::cross(vb[1] - vb[0], vb[2] - vb[0]));
+        if (shared == 2 && glm::dot(na, nb) > 0.9999f && glm::length(ownA + ownB - sharedSum) < 1e-5f * size) {
+            out.emitterQuad[k] = kQuadFirstHalf;
+            out.emitterQuad[k + 1] = kQuadSecondHalf;
+        }
+    }
     if (!out.emitters.empty()) {
         double total = 0.0;
         for (double w : weights) total += w;
@@ -210,6 +236,7 @@ TraceSceneView TraceScene::view() const {
     v.emitters = emitters.empty() ? nullptr : emitters.data();
     v.emitterCdf = emitterCdf.empty() ? nullptr : emitterCdf.data();
     v.emitterSelectPdf = emitterSelectPdf.empty() ? nullptr : emitterSelectPdf.data();
+    v.emitterQuad = emitterQuad.empty() ? nullptr : emitterQuad.data();
     v.emitterCount = static_cast<uint32_t>(emitters.size());
     return v;
 }
@@ -219,7 +246,7 @@ size_t TraceScene::memoryBytes() const {
            uv1.size() * sizeof(vec2) + colors.size() * sizeof(vec4) + materialIds.size() * sizeof(uint32_t) +
            materials.size() * sizeof(TraceMaterial) + textures.size() * sizeof(TraceTexture) +
            texels.size() * sizeof(float) + lights.size() * sizeof(TraceLight) + emitters.size() * sizeof(uint32_t) +
-           emitterCdf.size() * sizeof(float) + emitterSelectPdf.size() * sizeof(float);
+           emitterCdf.size() * sizeof(float) + emitterSelectPdf.size() * sizeof(float) + emitterQuad.size();
 }
 
 }  // namespace vl

@@ -78,8 +78,14 @@ struct TraceSceneView {
     const uint32_t* emitters = nullptr;       // emissive triangle ids
     const float* emitterCdf = nullptr;        // per emitter, inclusive; the last is exactly 1
     const float* emitterSelectPdf = nullptr;  // per triangle: probability that light sampling picks it
+    // Per emitter: kQuadSingle, kQuadSecondHalf, or (for the first half of a parallelogram
+    // quad of one uniform emitter, the next emitter its other half) kQuadFirstHalf. The
+    // receivers' direct term samples such a quad as one square grid (direct_light.h).
+    const int8_t* emitterQuad = nullptr;
     uint32_t emitterCount = 0;
 };
+
+constexpr int8_t kQuadSingle = 0, kQuadFirstHalf = 1, kQuadSecondHalf = 2;
 
 class TraceScene {
 public:
@@ -102,6 +108,7 @@ public:
     std::vector<uint32_t> emitters;
     std::vector<float> emitterCdf;
     std::vector<float> emitterSelectPdf;
+    std::vector<int8_t> emitterQuad;
 };
 
 // ---- Surface queries (VL_HOSTDEV) ------------------------------------------------------

@@ -279,21 +279,38 @@ TEST_CASE("The GPU receiver kernel run on the host equals shadeReceivers bit for
 
 TEST_CASE("lightVoxels with a kernel runner gives the TBB loop's bits and stats", "[cuda]") {
     const Cornell& c = cornell();
-    for (const VisibilityTraversal traversal : {VisibilityTraversal::Hdda, VisibilityTraversal::Dda}) {
-        LightingSettings settings;
-        settings.traversal = traversal;
-        VoxelScene cpu = c.voxels, host = c.voxels;
-        const LightingStats a = lightVoxels(c.scene, cpu, settings);
-        seenEmitterSamples = 0;
-        const LightingStats b = lightVoxels(c.scene, host, settings, nullptr, &countingVoxelRunner);
-        REQUIRE(a.voxelLightEvaluations > 0);
-        CHECK(b.voxelLightEvaluations == a.voxelLightEvaluations);
-        CHECK(b.visibilitySteps == a.visibilitySteps);
-        CHECK(host.radiance == cpu.radiance);
-        CHECK(host.occlusion == cpu.occlusion);
-        // The launcher copies this many emitter samples: all of them.
-        REQUIRE(a.emitterSamples > 0);
-        CHECK(seenEmitterSamples == a.emitterSamples);
+    // The box's light is uniform: sampled per voxel, it has no fixed samples to copy. With a
+    // white emissive texture it keeps the same light and gets fixed samples.
+    Scene textured = c.scene;
+    Texture white;
+    white.name = "white";
+    white.image = Image(1, 1, 4);
+    for (int k = 0; k < 4; ++k) white.image.at(0, 0, k) = 1.0f;
+    textured.textures.push_back(white);
+    int texturedEmitters = 0;
+    for (Material& m : textured.materials)
+        if (m.emissive()) {
+            m.emissiveTexture.texture = static_cast<int>(textured.textures.size()) - 1;
+            ++texturedEmitters;
+        }
+    REQUIRE(texturedEmitters > 0);
+    for (const Scene* scene : {&c.scene, static_cast<const Scene*>(&textured)}) {
+        for (const VisibilityTraversal traversal : {VisibilityTraversal::Hdda, VisibilityTraversal::Dda}) {
+            LightingSettings settings;
+            settings.traversal = traversal;
+            VoxelScene cpu = c.voxels, host = c.voxels;
+            const LightingStats a = lightVoxels(*scene, cpu, settings);
+            seenEmitterSamples = 0;
+            const LightingStats b = lightVoxels(*scene, host, settings, nullptr, &countingVoxelRunner);
+            REQUIRE(a.voxelLightEvaluations > 0);
+            CHECK(b.voxelLightEvaluations == a.voxelLightEvaluations);
+            CHECK(b.visibilitySteps == a.visibilitySteps);
+            CHECK(host.radiance == cpu.radiance);
+            CHECK(host.occlusion == cpu.occlusion);
+            // The launcher copies this many fixed emitter samples: all of them.
+            CHECK((a.emitterSamples > 0) == (scene == &textured));
+            CHECK(seenEmitterSamples == a.emitterSamples);
+        }
     }
 }
 

@@ -108,7 +108,7 @@ void runLight(const LightOptions& options) {
     voxels.settings = note.str();
     writeVoxelFile(voxels, output);
 
-    std::printf("%s: %zu voxels, %llu lights, %llu emissive triangles (%llu samples)\n", options.grids.c_str(),
+    std::printf("%s: %zu voxels, %llu lights, %llu emissive triangles (%llu fixed samples)\n", options.grids.c_str(),
                 voxels.size(), static_cast<unsigned long long>(stats.lights),
                 static_cast<unsigned long long>(stats.emitterTriangles),
                 static_cast<unsigned long long>(stats.emitterSamples));

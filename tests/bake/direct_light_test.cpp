@@ -1,0 +1,67 @@
+// The receivers' exact direct term (bake/direct_light.h) against closed forms: a square light
+// over a floor, a ledge half way up casting a penumbra across it.
+#include "bake/direct_light.h"
+#include "scene/scene.h"
+#include "support/form_factor.h"
+#include "tests/bake/quad_scene.h"
+#include "trace/bvh.h"
+#include "trace/trace_scene.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+using namespace vl;
+using namespace vl::test;
+
+TEST_CASE("A quad light's penumbra at the receivers: one square grid over the quad errs less than its two triangles",
+          "[bake]") {
+    // Light: the square [−0.3, 0.3]² at z = 1 facing down, radiance 2. Ledge: z = 0.5 over
+    // x < 0. A floor point p (z = 0) sees the part of the light with x ≥ −p.x (the ray to it
+    // crosses z = 0.5 at (p.x + x) / 2), so its irradiance is Le·π·F of that rectangle.
+    const float Le = 2.0f, half = 0.3f;
+    Scene scene;
+    const int floor = addLambert(scene, vec3(0.5f));
+    const int light = addLambert(scene, vec3(0.0f), vec3(Le));
+    addQuad(scene, "floor", floor, vec3(-2, -2, 0), vec3(2, -2, 0), vec3(2, 2, 0), vec3(-2, 2, 0));
+    addQuad(scene, "ledge", floor, vec3(-2, -2, 0.5f), vec3(0, -2, 0.5f), vec3(0, 2, 0.5f), vec3(-2, 2, 0.5f));
+    addQuad(scene, "light", light, vec3(-half, -half, 1), vec3(-half, half, 1), vec3(half, half, 1),
+            vec3(half, -half, 1));
+    const SceneTriangles triangles = gatherTriangles(scene);
+    const Bvh bvh = Bvh::build(triangles);
+    const TraceScene trace = TraceScene::build(scene, triangles);
+    REQUIRE(trace.emitterQuad == std::vector<int8_t>{kQuadFirstHalf, kQuadSecondHalf});
+    TraceSceneView asQuad = trace.view();
+    TraceSceneView asTriangles = asQuad;
+    asTriangles.emitterQuad = nullptr;
+
+    DirectLightSettings settings;  // 4 × 4 a triangle: 32 points; the quad ⌈4√2⌉² = 36
+    double squaresQuad = 0.0, squaresTriangles = 0.0, worstLit = 0.0;
+    int penumbra = 0;
+    for (int i = 0; i < 400; ++i) {
+        SurfaceSample r;
+        r.position = vec3(-0.35f + 0.7f * (i + 0.5f) / 400.0f, 0.37f * std::sin(0.1f * float(i)), 0.0f);
+        r.normal = vec3(0, 0, 1);
+        r.triangle = 0;
+        const double x = r.position.x, y = r.position.y;
+        const double all = Le * M_PI * rectangleFormFactor(-half - x, half - x, -half - y, half - y, 1.0);
+        const double exact =
+            Le * M_PI * rectangleFormFactor(std::max(-double(half), -x) - x, half - x, -half - y, half - y, 1.0);
+        const double quad = directIrradiance(asQuad, bvh.view(), r, settings, uint64_t(i)).x;
+        const double halves = directIrradiance(asTriangles, bvh.view(), r, settings, uint64_t(i)).x;
+        if (x >= half + 0.01) {  // the whole light in view: exact up to rounding
+            worstLit = std::max(worstLit, std::abs(quad - exact) / exact);
+        } else if (exact > 0.0 && exact < all) {  // errors as shares of the unshadowed light
+            squaresQuad += (quad - exact) * (quad - exact) / (all * all);
+            squaresTriangles += (halves - exact) * (halves - exact) / (all * all);
+            ++penumbra;
+        }
+    }
+    const double quadError = std::sqrt(squaresQuad / penumbra), trianglesError = std::sqrt(squaresTriangles / penumbra);
+    INFO(penumbra << " receivers in the penumbra: RMS error " << quadError << " of the unshadowed light as one quad, "
+                  << trianglesError << " as two triangles; wholly lit ones within " << worstLit);
+    REQUIRE(penumbra > 100);
+    CHECK(quadError < 0.85 * trianglesError);
+    CHECK(quadError < 0.03);
+    CHECK(worstLit < 1e-4);
+}
