@@ -94,7 +94,7 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          }},
         {"lightmap-subsamples", "n × n sub-texel probes per texel (default 4)",
          [](S& s, const std::string& v) { s.lightmap.subsamplesPerAxis = parseIntSetting("lightmap-subsamples", v, 1, 8); }},
-        {"emitter-strata", "n × n shadow points per emissive triangle for the exact direct term, ⌈n√2⌉² per parallelogram quad (default 4)",
+        {"emitter-strata", "n × n shadow points per emissive triangle for the exact direct term, ⌈n√2⌉² per parallelogram quad (default 5)",
          [](S& s, const std::string& v) { s.direct.emitterStrata = parseIntSetting("emitter-strata", v, 1, 64); }},
         {"width", "image width in pixels (default 256)",
          [](S& s, const std::string& v) { s.imageWidth = parseIntSetting("width", v, 1, 16384); }},

@@ -19,7 +19,13 @@
 namespace vl {
 
 struct DirectLightSettings {
-    int emitterStrata = 4;  // n: n × n visibility points per emissive triangle, ⌈n√2⌉² per parallelogram quad
+    // n: n × n visibility points per emissive triangle, ⌈n√2⌉² per parallelogram quad. 5: the
+    // Cycles quad box's lightmap holds issue 13's 3% at each of 16 random turns (2.41–2.91%,
+    // `build/accuracy/accuracy_rotations`), where 4 left one at 3.09%; it costs the lightmap
+    // stage 0.047 → 0.057 s (bake.json of `build/voxlight bake
+    // ../shared/reference/cornell_quad.gltf --emitter-strata N`, fastest of 3), only in
+    // penumbrae.
+    int emitterStrata = 5;
 };
 
 // Irradiance from emissive triangle `emitter` at receiver (p, ng, ns): ng is the geometric
@@ -112,7 +118,7 @@ VL_HOSTDEV inline vec3 emitterIrradiance(const TraceSceneView& s, const BvhView&
 // would take). Two n × n grids warped onto the triangles (sampleUniformTriangle) place their
 // strata less evenly than one grid of the quad, and a penumbra's error is what the strata
 // leave uneven: on the Cycles quad box the lightmap's direct error falls from 2.17% to 1.88%
-// with 36 points where the halves took 32 (test_bake "The default bake of the Cycles Cornell
+// at n = 4, with 36 points where the halves took 32 (test_bake "The default bake of the Cycles Cornell
 // boxes*" -s). The wholly-seen test takes the quad's corners, edge midpoints and centre (9
 // points for its halves' 14).
 VL_HOSTDEV inline vec3 emitterQuadIrradiance(const TraceSceneView& s, const BvhView& bvh, uint32_t first, const vec3& p,
