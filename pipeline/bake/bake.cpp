@@ -189,8 +189,9 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
         grown.lightmap = lightmap;
         checkMemoryBudget(scene, grown, voxelSize);
     }
-    if (scene.lights.empty() && !scene.hasEmitters())
-        diagnostics.warn(scene.sourcePath + ": the scene has no lights and no emissive materials: the bake is black");
+    if (maxComponent(settings.sky) > 0.0f) scene.sky.radiance = settings.sky;
+    if (scene.lights.empty() && !scene.hasEmitters() && !scene.sky.present())
+        diagnostics.warn(scene.sourcePath + ": the scene has no lights, no emissive materials and no sky: the bake is black");
 
     // Voxel lighting and receiver shading run on the GPU when the settings pick it.
     const bool onGpu = cuda::resolveDevice(settings.device, std::cerr);
@@ -240,11 +241,17 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
         return bounceTransport;
     };
 
+    BounceSky sky;
+    sky.radiance = scene.sky.radiance;
+    sky.openness = [&](const std::vector<GatherPoint>& points) {
+        return skyOpenness(points, static_cast<float>(result.voxels.voxelSize), bvhView, sceneView, settings.bounceRays);
+    };
+
     timed(result.stages, "bounces", [&] {
         Progress progress("bounces", uint64_t(settings.bounces) * result.voxels.size(), settings.quiet);
         propagateBounces(result.voxels, bounceConeSettings(settings), settings.bounces, settings.bounceGatherLevel,
                          settings.bounceTail ? BounceTail::Geometric : BounceTail::None, &progress, &bounced,
-                         &bouncePoints, byRays ? &bounceRays : nullptr);
+                         &bouncePoints, byRays ? &bounceRays : nullptr, &sky);
         return 0;
     });
     const bool reusePoints = bounced.levelCount() > 0 && settings.bounceGatherLevel == settings.gatherLevel;

@@ -287,6 +287,7 @@ void addJobLightsAndCameras(const BakeJob& job, Scene& scene) {
         camera.position = toLocal(camera.position);
         scene.cameras.push_back(camera);
     }
+    if (maxComponent(job.settings.sky) > 0.0f) scene.sky.radiance = job.settings.sky;
 }
 
 Scene loadJobScene(const BakeJob& job) {

@@ -20,7 +20,7 @@ struct BakeJob {
 };
 
 // The loaded scene with the job's added lights and cameras (given in world space, placed in
-// the scene's local frame).
+// the scene's local frame) and its sky (the `sky` setting).
 void addJobLightsAndCameras(const BakeJob& job, Scene& scene);
 
 // The job's scene as every bake of it sees it: the glTF loaded (strict when its settings are)

@@ -96,6 +96,26 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.lightmap.subsamplesPerAxis = parseIntSetting("lightmap-subsamples", v, 1, 8); }},
         {"emitter-strata", "n × n shadow points per emissive triangle for the exact direct term, ⌈n√2⌉² per parallelogram quad (default 5)",
          [](S& s, const std::string& v) { s.direct.emitterStrata = parseIntSetting("emitter-strata", v, 1, 64); }},
+        {"sky", "a uniform sky's radiance R,G,B in W/(m²·sr), seen wherever the scene does not block it (default 0: none)",
+         [](S& s, const std::string& v) {
+             vec3 radiance(0.0f);
+             std::istringstream in(v);
+             bool read = static_cast<bool>(in >> radiance.x);
+             if (v.find(',') == std::string::npos) {
+                 radiance = vec3(radiance.x);
+             } else {
+                 char c1 = 0, c2 = 0;
+                 read = read && (in >> c1 >> radiance.y >> c2 >> radiance.z) && c1 == ',' && c2 == ',';
+             }
+             if (!read || !(in >> std::ws).eof())
+                 throw SettingsError("setting sky: '" + v + "' is not R,G,B (or one value for all three)");
+             if (!isFinite(radiance) || glm::min(radiance.x, glm::min(radiance.y, radiance.z)) < 0.0f ||
+                 glm::max(radiance.x, glm::max(radiance.y, radiance.z)) > 1e9f)
+                 throw SettingsError("setting sky: '" + v + "' must be finite, non-negative and at most 1e9");
+             s.sky = radiance;
+         }},
+        {"sky-strata", "n × n directions per receiver sample that look for the sky (default 10)",
+         [](S& s, const std::string& v) { s.direct.skyStrata = parseIntSetting("sky-strata", v, 1, 64); }},
         {"width", "image width in pixels (default 256)",
          [](S& s, const std::string& v) { s.imageWidth = parseIntSetting("width", v, 1, 16384); }},
         {"height", "image height in pixels (default 256)",
@@ -160,6 +180,8 @@ void validateBakeSettings(const BakeSettings& s) {
                                 std::to_string(kMaxGatherRaysPerAxis));
     if (s.direct.emitterStrata < 1 || s.direct.emitterStrata > 64)
         throw SettingsError("setting emitter-strata = " + std::to_string(s.direct.emitterStrata) + " is outside 1..64");
+    if (s.direct.skyStrata < 1 || s.direct.skyStrata > 64)
+        throw SettingsError("setting sky-strata = " + std::to_string(s.direct.skyStrata) + " is outside 1..64");
 }
 
 std::string describeBakeSettings(const BakeSettings& s) {
@@ -174,6 +196,7 @@ std::string describeBakeSettings(const BakeSettings& s) {
         << ", bounce-rays=" << s.bounceRays << ", bounce-gather-level=" << s.bounceGatherLevel << ", lightmap-res=" << s.lightmap.width
         << ", lightmap-subsamples=" << s.lightmap.subsamplesPerAxis << ", emitter-strata=" << s.direct.emitterStrata
         << ", width=" << s.imageWidth << ", height=" << s.imageHeight;
+    if (maxComponent(s.sky) > 0.0f) out << ", sky=" << s.sky.x << "," << s.sky.y << "," << s.sky.z << ", sky-strata=" << s.direct.skyStrata;
     if (s.lighting.attenuation)
         out << ", attenuation=" << s.lighting.attenuation->constant << "," << s.lighting.attenuation->linear << ","
             << s.lighting.attenuation->quadratic;

@@ -87,6 +87,8 @@ struct BakeSettings {
     int bounceRays = 16;
     LightmapSettings lightmap;
     DirectLightSettings direct;
+    // A uniform sky's radiance, W/(m²·sr) (scene.h Sky; glTF has none): zero, no sky.
+    vec3 sky{0.0f};
     int imageWidth = 256;
     int imageHeight = 256;
     int imageSubsamples = 2;  // n × n primary rays per pixel

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 namespace vl {
 namespace fs = std::filesystem;
@@ -162,6 +163,23 @@ json readJson(const std::string& path, const std::string& what) {
     }
 }
 
+// "sky": {"radiance": [r, g, b]} (or one number): the bake setting `sky`.
+void readSky(const json& object, BakeSettings& settings, const std::string& where) {
+    if (!object.is_object() || !object.contains("radiance"))
+        throw InputError(where + ": \"sky\" must be an object with a \"radiance\" (W/(m²·sr): [r, g, b] or one number)");
+    for (const auto& [key, value] : object.items())
+        if (key != "radiance") throw InputError(where + ".sky: unknown key \"" + key + "\" (known: radiance)");
+    const json& radiance = object["radiance"];
+    const vec3 r = radiance.is_number() ? vec3(radiance.get<float>()) : readVec3(radiance, where + ".sky.radiance");
+    std::ostringstream text;
+    text << r.x << "," << r.y << "," << r.z;
+    try {
+        applySetting(bakeSettingsTable(), settings, "sky", text.str());
+    } catch (const SettingsError& e) {
+        throw SettingsError(where + ".sky.radiance: " + e.what());
+    }
+}
+
 }  // namespace
 
 std::string sceneOutputName(const std::string& scenePath) { return fs::path(scenePath).stem().string(); }
@@ -181,6 +199,7 @@ std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& de
         BakeSettings global = defaults;
         if (root.contains("settings")) applySettings(global, root["settings"], path);
         if (root.contains("atlases")) global.lightmap.atlases = readAtlasGroups(root["atlases"], path + ": atlases");
+        if (root.contains("sky")) readSky(root["sky"], global, path);
         const std::string outputRoot = root.contains("output") ? resolve(root["output"].get<std::string>()) : defaultOutputRoot;
 
         std::vector<BakeJob> jobs;
@@ -193,6 +212,7 @@ std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& de
             job.scenePath = resolve(entry["path"].get<std::string>());
             job.settings = global;
             if (entry.contains("settings")) applySettings(job.settings, entry["settings"], where);
+            if (entry.contains("sky")) readSky(entry["sky"], job.settings, where);
             // Mesh names belong to one scene: a scene's list replaces the global one ([] for none).
             if (entry.contains("atlases"))
                 job.settings.lightmap.atlases = readAtlasGroups(entry["atlases"], where + ".atlases");

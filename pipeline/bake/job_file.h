@@ -5,10 +5,11 @@
 //   "output": "output",                       // root folder for scenes without "output"
 //   "settings": { "resolution": 128, "lightmap-res": 512 },   // any bake setting, for all
 //   "atlases": [ { "name": "walls", "meshes": ["Floor", "BackWall"], "resolution": 1024 } ],
+//   "sky": { "radiance": [0.6, 0.75, 1.0] },  // a uniform sky, W/(m²·sr), for all (the `sky` setting)
 //   "scenes": [
 //     { "path": "scenes/cornell_box.gltf" },
 //     { "path": "level.glb", "name": "level", "output": "out/level",
-//       "settings": { "cones": 32, "images": false },
+//       "settings": { "cones": 32, "images": false }, "sky": { "radiance": 0 },  // replaces the global sky
 //       "atlases": [ { "name": "props", "meshes": ["Chair"], "resolution": [512, 256] } ],  // replaces the global list
 //       "lights": [ { "name": "lamp", "type": "point", "position": [1, 2, 3],
 //                     "color": [1, 1, 1], "intensity": 5 } ],      // W/sr (W/m² directional)

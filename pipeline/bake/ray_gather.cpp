@@ -201,6 +201,7 @@ FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView
     struct Chunk {
         std::vector<uint32_t> count;  // entries per point of the chunk
         std::vector<FaceTransport::Entry> entries;
+        std::vector<float> open;      // per point of the chunk
     };
     // Many rays of a point read the same face: each thread sums a point's weights per face in
     // a dense scratch array (summed in ray order, whichever thread it is), then lists the
@@ -220,7 +221,9 @@ FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView
         IndexLeafCache leaves;
         const size_t first = c * kChunkPoints, last = std::min(points.size(), first + kChunkPoints);
         for (size_t q = first; q < last; ++q) {
+            size_t hits = 0;
             traceFan(rayFan(points[q], h, bvh, scene), pattern, bvh, [&](const Ray& ray, const Hit& hit) {
+                ++hits;
                 readHitTexels(level0, leaves, ray, hit, windingCross(scene, hit.triangle),
                               [&](int32_t voxel, int travel, float weight) {
                                   // The texel of travel t shows face t ^ 1 (radiance_mips.h).
@@ -235,19 +238,36 @@ FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView
                 scratch.weight[slot] = 0.0f;
             }
             part.count.push_back(static_cast<uint32_t>(scratch.read.size()));
+            part.open.push_back(rayWeight * static_cast<float>(pattern.size() - hits));
             scratch.read.clear();
         }
         if (progress) progress->advance(last - first);
     });
     size_t q = 0;
+    transport.open.reserve(points.size());
     for (const Chunk& part : parts) {
         transport.entries.insert(transport.entries.end(), part.entries.begin(), part.entries.end());
+        transport.open.insert(transport.open.end(), part.open.begin(), part.open.end());
         for (uint32_t count : part.count) {
             transport.begin[q + 1] = transport.begin[q] + count;
             ++q;
         }
     }
     return transport;
+}
+
+std::vector<float> skyOpenness(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
+                               const TraceSceneView& scene, int raysPerAxis) {
+    checkRays(raysPerAxis);
+    const std::vector<vec3> pattern = fanPattern(raysPerAxis);
+    const float rayWeight = kPi / float(pattern.size());
+    std::vector<float> open(points.size());
+    tbb::parallel_for(size_t(0), points.size(), [&](size_t q) {
+        size_t hits = 0;
+        traceFan(rayFan(points[q], voxelSize, bvh, scene), pattern, bvh, [&](const Ray&, const Hit&) { ++hits; });
+        open[q] = rayWeight * static_cast<float>(pattern.size() - hits);
+    });
+    return open;
 }
 
 BackProbe probeSingleSidedBacks(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,

@@ -26,7 +26,8 @@
 // level that matches a cone of the ray's solid angle instead (trilinear around the hit) let
 // the far rays of the bright rooms read the lit room's floor across the wall (room B 0.29% /
 // 0.41% / 0.25% of room A at walls 0.5 / 1 / 2 voxels) for the same Cornell error. A ray that
-// leaves the scene reads nothing.
+// leaves the scene reads nothing: it sees the sky, which the bounces count as direct light
+// (FaceTransport::open) and the receivers trace on their own (bake/direct_light.h).
 //
 // Which faces a point's rays read, and with what weight, depends on where surface is, not on
 // the light: the bounces trace each point's fan once into a FaceTransport (rayTransport) and
@@ -80,6 +81,12 @@ std::vector<vec3> gatherByRays(const std::vector<GatherPoint>& points, const Mip
 FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView& mips, size_t voxelCount,
                            const BvhView& bvh, const TraceSceneView& scene, int raysPerAxis,
                            Progress* progress = nullptr);
+
+// Per point, the weight of its rays (raysPerAxis² as gatherByRays sends them) that leave the
+// scene: irradiance per unit radiance of a uniform sky, π where nothing blocks it
+// (FaceTransport::open, for the bounces when they gather by cones).
+std::vector<float> skyOpenness(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
+                               const TraceSceneView& scene, int raysPerAxis);
 
 struct BackProbe {
     uint64_t hits = 0;              // rays that hit a triangle

@@ -526,7 +526,10 @@ CameraReceivers buildCameraReceivers(const TraceScene& scene, const Bvh& bvh, co
                         const vec2 film(x + (i + 0.5f) / n, y + (j + 0.5f) / n);
                         const Ray ray = pinholeRay(camera, film);
                         Hit hit;
-                        if (!intersectClosest(bv, ray, hit)) continue;
+                        if (!intersectClosest(bv, ray, hit)) {  // the sky, seen directly
+                            emission += sv.skyRadiance * weight;
+                            continue;
+                        }
                         const SurfaceHit h = surfaceAt(sv, hit.triangle, hit.b1, hit.b2);
                         const bool front = glm::dot(h.geometricNormal, ray.direction) <= 0.0f;
                         vec3 normal = front ? h.shadingNormal : -h.shadingNormal;

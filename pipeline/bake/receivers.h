@@ -96,7 +96,7 @@ std::vector<LightmapAtlas> buildLightmapReceivers(const Scene& scene, const Ligh
 
 struct CameraReceivers {
     SurfaceSampleSet receivers;  // per pixel; weights 1/n² per hit
-    Image emission;              // RGB: emitted radiance seen directly, pixel mean
+    Image emission;              // RGB: emitted radiance and the sky seen directly, pixel mean
     Image albedo;                // RGB: base colour, pixel mean (background 0)
     Image mask;                  // 1 channel: fraction of the pixel's rays that hit a surface
 };

@@ -165,7 +165,7 @@ std::vector<vec3> applyTransport(const FaceTransport& transport, const std::vect
 
 void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces, int gatherLevel,
                       BounceTail tail, Progress* progress, RadianceMips* resultMips, IrradianceCache* resultCache,
-                      const TransportBuilder* transportBuilder) {
+                      const TransportBuilder* transportBuilder, const BounceSky* sky) {
     validateConeSettings(settings);
     if (bounces < 0 || bounces > kMaxBounces)
         throw SettingsError("bounces = " + std::to_string(bounces) + " is outside [0, " +
@@ -178,7 +178,7 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
     IrradianceCache cache = given ? std::move(*resultCache) : IrradianceCache(voxels, gatherLevel);
 
     const ConeSet& set = coneSet(settings.coneCount);
-    const std::vector<FaceRadiance> lit = litFaces(voxels);
+    std::vector<FaceRadiance> lit = litFaces(voxels);
     std::vector<FaceRadiance> current = lit;
     std::vector<FaceRadiance> next(voxels.size());
     RadianceMips mips = buildRadianceMips(voxels, isotropic(voxels, current), current);
@@ -186,14 +186,46 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
     const SideWeights weights = sideWeights(voxels, cache.view(mips.view()));
     std::vector<vec3> selfIrradiance(weights.selfGathered.size());
     // By transport, the cache's points and then the self-gathered sides' are one map.
+    const bool skyLit = sky && maxComponent(sky->radiance) > 0.0f;
     const FaceTransport* transport = nullptr;
-    if (transportBuilder) {
-        std::vector<GatherPoint> points = cache.points();
+    std::vector<GatherPoint> points;
+    if (transportBuilder || skyLit) {
+        points = cache.points();
         for (uint32_t sideSlot : weights.selfGathered) points.push_back(selfPoint(voxels, mips.view(), sideSlot));
+    }
+    if (transportBuilder) {
         transport = &(*transportBuilder)(points, mips.view());
         if (transport->pointCount() != points.size())
             throw Error("propagateBounces(" + voxels.sourceScene + "): the transport maps " +
                         std::to_string(transport->pointCount()) + " points, not " + std::to_string(points.size()));
+    }
+    if (skyLit) {
+        const std::vector<float> open =
+            transport && transport->open.size() == points.size() ? transport->open : sky->openness(points);
+        if (open.size() != points.size())
+            throw Error("propagateBounces(" + voxels.sourceScene + "): the sky's openness has " +
+                        std::to_string(open.size()) + " points, not " + std::to_string(points.size()));
+        const size_t cachePoints = cache.points().size();
+        tbb::parallel_for(size_t(0), voxels.size(), [&](size_t i) {
+            const VoxelSides sides = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
+            const vec3 reflectance = voxels.albedo[i] * kInvPi;
+            for (size_t f = 0; f < 6; ++f) {
+                const int s = sides.sideOfFace[f];
+                if (s < 0) continue;
+                const size_t slot = i * 6 + size_t(s);
+                float openness = 0.0f;
+                if (weights.begin[slot] == weights.begin[slot + 1]) {
+                    const auto found = std::lower_bound(weights.selfGathered.begin(), weights.selfGathered.end(),
+                                                        static_cast<uint32_t>(slot));
+                    openness = open[cachePoints + size_t(found - weights.selfGathered.begin())];
+                } else {
+                    for (uint32_t k = weights.begin[slot]; k < weights.begin[slot + 1]; ++k)
+                        openness += weights.weight[k] * open[weights.point[k]];
+                }
+                lit[i][f] += reflectance * sky->radiance * openness;
+            }
+        });
+        current = lit;
     }
     double added = 0.0, addedBefore = 0.0;  // light the last two bounces added
     std::vector<FaceRadiance> older;  // L two bounces before the last, for the tail's local ratios

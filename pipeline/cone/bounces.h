@@ -78,7 +78,8 @@ enum class BounceTail {
 // one per side no point applies to, at the voxel's centre) to a FaceTransport built once
 // (bake/ray_gather.h rayTransport: rays against the triangles), which it owns and keeps past
 // the call (the bake's final gather applies it again), and every bounce applies it to the
-// last bounce's faceRadiance; the mips are then only relit for `mips`.
+// last bounce's faceRadiance; the mips are then only relit for `mips`. `sky`, when given
+// with a radiance, lights the voxels' surfaces before the first bounce (BounceSky).
 //
 // Irradiance at points as a fixed linear map of the voxels' face radiance: E[q] = Σ weight ·
 // faceRadiance[slot / 6][slot % 6] over q's entries. A gather whose visibility does not
@@ -90,7 +91,19 @@ struct FaceTransport {
     };
     std::vector<uint32_t> begin{0};  // point q: entries [begin[q], begin[q + 1])
     std::vector<Entry> entries;
+    // Per point, the weight of its rays that leave the scene: irradiance per unit radiance of
+    // a uniform sky (π where nothing blocks it). Empty where the builder does not know it.
+    std::vector<float> open;
     size_t pointCount() const { return begin.size() - 1; }
+};
+
+// A uniform sky for the bounces (scene.h Sky): what the voxels' surfaces receive from it
+// joins their direct light before the first bounce, at every gather point radiance × its
+// openness (a FaceTransport's `open`, else `openness` of the points), interpolated to the
+// voxels' sides as the bounces' irradiance is.
+struct BounceSky {
+    vec3 radiance{0.0f};
+    std::function<std::vector<float>(const std::vector<GatherPoint>& points)> openness;
 };
 // E at every point of `transport` from `faces` (TBB-parallel; each point summed in entry
 // order: the same bytes at any thread count). Throws Error when a slot lies past `faces`.
@@ -99,6 +112,7 @@ using TransportBuilder =
     std::function<const FaceTransport&(const std::vector<GatherPoint>& points, const MipView& mips)>;
 void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int bounces, int gatherLevel,
                       BounceTail tail, Progress* progress = nullptr, RadianceMips* mips = nullptr,
-                      IrradianceCache* cache = nullptr, const TransportBuilder* transport = nullptr);
+                      IrradianceCache* cache = nullptr, const TransportBuilder* transport = nullptr,
+                      const BounceSky* sky = nullptr);
 
 }  // namespace vl

@@ -118,6 +118,14 @@ struct Camera {
 // before anything is rounded to float. Why: float holds a position 10 km from the world origin
 // to 1 mm, and voxels anchored at the world origin fell at other offsets inside their walls
 // when the scene moved; in the local frame a translated scene is the same floats.
+// Light from beyond the scene in every direction not blocked by it: a uniform sky of
+// radiance W/(m²·sr) (Cycles' world colour). glTF has none; a job file's or the command
+// line's `sky` setting gives it (bake_settings.h).
+struct Sky {
+    vec3 radiance{0.0f};
+    bool present() const { return radiance.x > 0.0f || radiance.y > 0.0f || radiance.z > 0.0f; }
+};
+
 struct Scene {
     std::string sourcePath;  // the file it came from, for messages
     std::string name;        // file stem, used for output folders
@@ -127,6 +135,7 @@ struct Scene {
     std::vector<Texture> textures;
     std::vector<Light> lights;
     std::vector<Camera> cameras;
+    Sky sky;
     std::vector<std::string> warnings;  // also printed when raised; repeated in reports
     size_t degenerateTrianglesDropped = 0;
 

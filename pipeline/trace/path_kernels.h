@@ -6,7 +6,8 @@
 // point on it picked by area (pdf converted to solid angle), combined with BSDF sampling
 // by the power heuristic; emitters hit by a BSDF ray get the matching MIS weight (1 after
 // a delta lobe or for the camera's own ray). Russian roulette (ERRATA eq. 16, c = 0) from
-// bounce `rouletteStart` on, survival probability min(1, max throughput).
+// bounce `rouletteStart` on, survival probability min(1, max throughput). A path that leaves
+// the scene sees the uniform sky (TraceSceneView::skyRadiance), by BSDF sampling alone.
 //
 // Bounce counting follows Cycles: max bounces B means light scattered at most B + 1 times
 // on its way to the sensor (B = 0 is direct light only). "Direct" is light scattered once
@@ -193,7 +194,13 @@ VL_HOSTDEV inline void continuePath(const TraceSceneView& s, const BvhView& bvh,
         ray.origin = offsetRayOrigin(h.position, glm::dot(wi, ng) > 0.0f ? ng : -ng, bvh.extent);
         ray.direction = wi;
         Hit hit;
-        if (!intersectClosest(bvh, ray, hit)) return;  // black world
+        if (!intersectClosest(bvh, ray, hit)) {
+            // Out of the scene: the sky, by BSDF sampling alone (no next-event estimation of
+            // a uniform sky; a diffuse lobe's cosine sampling is its own importance sampling).
+            const vec3 contribution = beta * s.skyRadiance;
+            if (isFinite(contribution)) sink += contribution;
+            return;
+        }
         const SurfaceHit next = surfaceAt(s, hit.triangle, hit.b1, hit.b2);
         const vec3 le = emissionAt(s, next, -wi);
         if (maxComponent(le) > 0.0f) {
@@ -212,7 +219,10 @@ VL_HOSTDEV inline PathSample traceCameraPath(const TraceSceneView& s, const BvhV
                                              const PathSettings& settings) {
     PathSample out;
     Hit hit;
-    if (!intersectClosest(bvh, ray, hit)) return out;
+    if (!intersectClosest(bvh, ray, hit)) {
+        out.direct = s.skyRadiance;
+        return out;
+    }
     const SurfaceHit h = surfaceAt(s, hit.triangle, hit.b1, hit.b2);
     const vec3 wo = -ray.direction;
     out.direct = emissionAt(s, h, wo);

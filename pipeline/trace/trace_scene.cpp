@@ -159,6 +159,10 @@ TraceScene TraceScene::build(const Scene& scene, const SceneTriangles& triangles
         out.lights.push_back(convertLight(light));
     }
 
+    if (!isFinite(scene.sky.radiance) || glm::min(scene.sky.radiance.x, glm::min(scene.sky.radiance.y, scene.sky.radiance.z)) < 0.0f)
+        throw InputError(scene.sourcePath + ": the sky's radiance is negative or not finite");
+    out.skyRadiance = scene.sky.radiance;
+
     // Emissive triangles, picked in proportion to area × mean emission (their power up to
     // the emissive texture).
     std::vector<double> weights;
@@ -238,6 +242,7 @@ TraceSceneView TraceScene::view() const {
     v.emitterSelectPdf = emitterSelectPdf.empty() ? nullptr : emitterSelectPdf.data();
     v.emitterQuad = emitterQuad.empty() ? nullptr : emitterQuad.data();
     v.emitterCount = static_cast<uint32_t>(emitters.size());
+    v.skyRadiance = skyRadiance;
     return v;
 }
 

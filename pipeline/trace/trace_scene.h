@@ -83,6 +83,8 @@ struct TraceSceneView {
     // receivers' direct term samples such a quad as one square grid (direct_light.h).
     const int8_t* emitterQuad = nullptr;
     uint32_t emitterCount = 0;
+
+    vec3 skyRadiance{0.0f};  // Scene::sky: what a ray that leaves the scene sees
 };
 
 constexpr int8_t kQuadSingle = 0, kQuadFirstHalf = 1, kQuadSecondHalf = 2;
@@ -109,6 +111,7 @@ public:
     std::vector<float> emitterCdf;
     std::vector<float> emitterSelectPdf;
     std::vector<int8_t> emitterQuad;
+    vec3 skyRadiance{0.0f};
 };
 
 // ---- Surface queries (VL_HOSTDEV) ------------------------------------------------------

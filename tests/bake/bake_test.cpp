@@ -420,7 +420,7 @@ TEST_CASE("A scene with no lights and no emitters bakes to black with a warning"
     const BakeResult result = bake(scene, settings, diagnostics);
     REQUIRE(diagnostics.warnings().size() == 1);
     CHECK_THAT(diagnostics.warnings()[0], Catch::Contains("two rooms (test)") &&
-                                              Catch::Contains("no lights and no emissive materials"));
+                                              Catch::Contains("no lights, no emissive materials and no sky"));
     for (const BakedLightmap& l : result.lightmaps)
         for (float v : l.total.pixels) REQUIRE(v == 0.0f);
     settings.strict = true;

@@ -5,6 +5,7 @@
 // groups as a job file's "atlases", each into lightmap_<name>.exr.
 #include "tools/voxlight/commands.h"
 
+#include "bake/bake_settings.h"
 #include "bake/dilate.h"
 #include "bake/job_file.h"
 #include "bake/receivers.h"
@@ -56,6 +57,7 @@ struct ReferenceOptions {
     bool strict = false;
     bool quiet = false;
     std::string device = "cpu";
+    std::string sky;  // the bake setting's form: R,G,B or one value
 };
 
 using Clock = std::chrono::steady_clock;
@@ -122,7 +124,12 @@ void runReference(const ReferenceOptions& o) {
     auto t = Clock::now();
     LoadOptions load;
     load.strict = o.strict;
-    const Scene scene = loadGltf(o.scene, load);
+    Scene scene = loadGltf(o.scene, load);
+    if (!o.sky.empty()) {
+        BakeSettings parsed;  // the one parser of a sky's radiance: the bake setting's
+        applySetting(bakeSettingsTable(), parsed, "sky", o.sky);
+        scene.sky.radiance = parsed.sky;
+    }
     timings["load"] = secondsSince(t);
     if (!o.noLightmap) checkAtlasGroups(scene, lightmap);  // before a render that may take minutes
     Diagnostics diagnostics(o.strict);
@@ -134,8 +141,8 @@ void runReference(const ReferenceOptions& o) {
     t = Clock::now();
     const TraceScene traceScene = TraceScene::build(scene, triangles);
     timings["trace_scene"] = secondsSince(t);
-    if (traceScene.emitters.empty() && traceScene.lights.empty())
-        diagnostics.warn(o.scene + ": the scene has no lights and no emissive surfaces: the reference is black");
+    if (traceScene.emitters.empty() && traceScene.lights.empty() && !scene.sky.present())
+        diagnostics.warn(o.scene + ": the scene has no lights, no emissive surfaces and no sky: the reference is black");
 
     const std::filesystem::path outDir =
         o.output.empty() ? std::filesystem::path("output") / scene.name / "reference" : std::filesystem::path(o.output);
@@ -278,6 +285,7 @@ void addReferenceCommand(CLI::App& app) {
     cmd->add_flag("--no-lightmap", o->noLightmap, "skip the lightmap");
     cmd->add_flag("--strict", o->strict, "treat every warning as an error");
     cmd->add_flag("-q,--quiet", o->quiet, "no progress output");
+    cmd->add_option("--sky", o->sky, "a uniform sky's radiance R,G,B in W/(m²·sr), seen by every path that leaves the scene (default: none)");
     cmd->add_option("--device", o->device,
                     "cpu | cuda | auto: auto takes the GPU when one is usable, else says why it runs on the CPU "
                     "(default cpu)");
