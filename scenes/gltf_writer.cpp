@@ -146,10 +146,15 @@ void writeGltf(const SceneDescription& scene, const std::string& directory, cons
             const vec3 n = quadNormal(quad);
             const uint32_t base = static_cast<uint32_t>(positions.size() / 3);
             static const vec2 kCorners[4] = {{0, 1}, {1, 1}, {1, 0}, {0, 0}};
+            const SceneMaterial& material = scene.materials.at(size_t(mesh.material));
+            const vec2 repeats = material.textureMetres > 0.0f
+                                     ? vec2(glm::length(quad[1] - quad[0]), glm::length(quad[3] - quad[0])) /
+                                           material.textureMetres
+                                     : vec2(1.0f);
             for (int i = 0; i < 4; ++i) {
                 positions.insert(positions.end(), {quad[i].x, quad[i].y, quad[i].z});
                 normals.insert(normals.end(), {n.x, n.y, n.z});
-                uv0.insert(uv0.end(), {kCorners[i].x, kCorners[i].y});
+                uv0.insert(uv0.end(), {kCorners[i].x * repeats.x, kCorners[i].y * repeats.y});
                 if (mesh.lightmapped) uv1.insert(uv1.end(), {atlas[m][q][i].x, atlas[m][q][i].y});
                 lower = glm::min(lower, quad[i]);
                 upper = glm::max(upper, quad[i]);
@@ -173,12 +178,18 @@ void writeGltf(const SceneDescription& scene, const std::string& directory, cons
         nodes.push_back("{\"name\":" + jsonString(mesh.name) + ",\"mesh\":" + std::to_string(m) + "}");
     }
 
-    std::vector<std::string> materials;
+    std::vector<std::string> materials, images, textures;
     bool usesEmissiveStrength = false;
     for (const SceneMaterial& material : scene.materials) {
         const float base[4] = {material.baseColor.x, material.baseColor.y, material.baseColor.z, 1.0f};
+        std::string texture;
+        if (!material.baseColorTexture.empty()) {
+            images.push_back("{\"uri\":" + jsonString(material.baseColorTexture) + "}");
+            textures.push_back("{\"source\":" + std::to_string(images.size() - 1) + ",\"sampler\":0}");
+            texture = ",\"baseColorTexture\":{\"index\":" + std::to_string(textures.size() - 1) + "}";
+        }
         std::string json = "{\"name\":" + jsonString(material.name) + ",\"pbrMetallicRoughness\":{\"baseColorFactor\":" +
-                           jsonVec(base, 4) + ",\"metallicFactor\":0,\"roughnessFactor\":1}";
+                           jsonVec(base, 4) + texture + ",\"metallicFactor\":0,\"roughnessFactor\":1}";
         if (maxComponent(material.emissiveFactor) > 0.0f) {
             json += ",\"emissiveFactor\":" + jsonVec(&material.emissiveFactor.x, 3);
             if (material.emissiveStrength != 1.0f) {
@@ -225,7 +236,11 @@ void writeGltf(const SceneDescription& scene, const std::string& directory, cons
         json << "  \"scene\":0,\n  \"scenes\":[{\"name\":" << jsonString(stem) << ",\"nodes\":[" << sceneNodes << "]}],\n"
              << "  \"nodes\":[\n    " << join(nodes) << "],\n"
              << "  \"meshes\":[\n    " << join(meshes) << "],\n"
-             << "  \"materials\":[\n    " << join(materials) << "],\n"
+             << "  \"materials\":[\n    " << join(materials) << "],\n";
+        if (!textures.empty())  // linear filtering, repeat (glTF's defaults, stated)
+            json << "  \"images\":[" << join(images) << "],\n  \"textures\":[" << join(textures)
+                 << "],\n  \"samplers\":[{\"magFilter\":9729,\"minFilter\":9987,\"wrapS\":10497,\"wrapT\":10497}],\n";
+        json
              << "  \"cameras\":[" << camera.str() << "],\n"
              << "  \"accessors\":[\n    " << join(accessors) << "],\n"
              << "  \"bufferViews\":[\n    " << join(bufferViews) << "],\n"

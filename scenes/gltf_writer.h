@@ -20,6 +20,10 @@ struct SceneMaterial {
     vec3 baseColor{0.8f};
     vec3 emissiveFactor{0.0f};
     float emissiveStrength = 1.0f;
+    // A base colour texture: a PNG beside the .gltf (written by the caller), repeated every
+    // textureMetres along each quad's edges in TEXCOORD_0 (0: once over each quad).
+    std::string baseColorTexture;
+    float textureMetres = 0.0f;
 };
 
 struct SceneMesh {

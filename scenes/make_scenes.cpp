@@ -9,6 +9,9 @@
 // the Blender-exported references in ../shared/reference.
 #include "scenes/gltf_writer.h"
 
+#include "core/image.h"
+#include "core/image_io.h"
+
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -18,6 +21,18 @@ using namespace vl;
 using namespace vl::scenes;
 
 namespace {
+
+SceneMaterial material(std::string name, vec3 baseColor, vec3 emissiveFactor = vec3(0.0f), float emissiveStrength = 1.0f,
+                       std::string texture = "", float textureMetres = 0.0f) {
+    SceneMaterial m;
+    m.name = std::move(name);
+    m.baseColor = baseColor;
+    m.emissiveFactor = emissiveFactor;
+    m.emissiveStrength = emissiveStrength;
+    m.baseColorTexture = std::move(texture);
+    m.textureMetres = textureMetres;
+    return m;
+}
 
 vec3 fromCornell(float x, float y, float z) { return vec3(0.556f - x / 1000.0f, y / 1000.0f, -z / 1000.0f); }
 
@@ -50,10 +65,10 @@ SceneMesh block(const char* name, const float (&faces)[5][12]) {
 
 SceneDescription cornellBox(bool pointLight) {
     SceneDescription scene;
-    scene.materials = {{"White", vec3(0.73f), vec3(0.0f), 1.0f},
-                       {"Red", vec3(0.63f, 0.065f, 0.05f), vec3(0.0f), 1.0f},
-                       {"Green", vec3(0.14f, 0.45f, 0.091f), vec3(0.0f), 1.0f},
-                       {"Light", vec3(0.0f), vec3(1.0f), 17.0f}};
+    scene.materials = {material("White", vec3(0.73f), vec3(0.0f), 1.0f),
+                       material("Red", vec3(0.63f, 0.065f, 0.05f), vec3(0.0f), 1.0f),
+                       material("Green", vec3(0.14f, 0.45f, 0.091f), vec3(0.0f), 1.0f),
+                       material("Light", vec3(0.0f), vec3(1.0f), 17.0f)};
     const vec3 inside = fromCornell(278.0f, 274.4f, 279.6f);
     auto wall = [&](const char* name, int material, const float (&p)[12]) {
         return SceneMesh{name, material, {oriented(cornellQuad(p), inside, true)}, true};
@@ -121,7 +136,7 @@ constexpr float kTwoRoomsWall = 0.1f;
 
 SceneDescription twoRooms() {
     SceneDescription scene;
-    scene.materials = {{"Plaster", vec3(0.8f), vec3(0.0f), 1.0f}};
+    scene.materials = {material("Plaster", vec3(0.8f), vec3(0.0f), 1.0f)};
     auto room = [&](const std::string& prefix, vec3 lo, vec3 hi) {
         const vec3 inside = 0.5f * (lo + hi);
         auto face = [&](const char* name, vec3 a, vec3 b, vec3 c, vec3 d) {
@@ -144,6 +159,149 @@ SceneDescription twoRooms() {
     return scene;
 }
 
+// A box [lo, hi] as six outward quads.
+std::vector<Quad> boxQuads(vec3 lo, vec3 hi) {
+    const vec3 c = 0.5f * (lo + hi);
+    const vec3 p000(lo.x, lo.y, lo.z), p100(hi.x, lo.y, lo.z), p010(lo.x, hi.y, lo.z), p110(hi.x, hi.y, lo.z);
+    const vec3 p001(lo.x, lo.y, hi.z), p101(hi.x, lo.y, hi.z), p011(lo.x, hi.y, hi.z), p111(hi.x, hi.y, hi.z);
+    return {oriented({p000, p100, p101, p001}, c, false), oriented({p010, p110, p111, p011}, c, false),
+            oriented({p000, p010, p011, p001}, c, false), oriented({p100, p110, p111, p101}, c, false),
+            oriented({p000, p100, p110, p010}, c, false), oriented({p001, p101, p111, p011}, c, false)};
+}
+
+// Deterministic texture noise in [0, 1).
+float hashNoise(uint32_t x, uint32_t y, uint32_t salt) {
+    uint32_t h = x * 0x8da6b343u ^ y * 0xd8163841u ^ salt * 0xcb1ab31fu;
+    h ^= h >> 13;
+    h *= 0x5bd1e995u;
+    h ^= h >> 15;
+    return static_cast<float>(h & 0xFFFFFFu) / 16777216.0f;
+}
+
+// Oak planks, 8 across the texture, each its own shade, with grain and dark seams (linear
+// albedo; written as an sRGB PNG).
+Image plankTexture() {
+    const int size = 256, planks = 8, width = size / planks;
+    Image image(size, size, 3);
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            const int plank = x / width;
+            const int offset = static_cast<int>(hashNoise(uint32_t(plank), 0, 7) * size);
+            const float shade = 0.8f + 0.4f * hashNoise(uint32_t(plank), uint32_t((y + offset) / size), 3);
+            const float grain = 0.9f + 0.1f * std::sin(0.35f * float(y + offset) + 3.0f * hashNoise(uint32_t(x), 0, 5));
+            const bool seam = x % width == 0 || (y + offset) % size == 0;
+            const float k = shade * grain * (seam ? 0.45f : 1.0f);
+            image.setRgb(x, y, vec3(0.42f, 0.27f, 0.15f) * k);
+        }
+    return image;
+}
+
+// A green chalkboard with a few lines of chalk writing and a worn, cloudy surface.
+Image boardTexture() {
+    const int w = 512, h = 128;
+    Image image(w, h, 3);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const float cloud = 0.85f + 0.3f * hashNoise(uint32_t(x / 16), uint32_t(y / 16), 11);
+            vec3 colour = vec3(0.035f, 0.10f, 0.06f) * cloud;
+            const int line = (y - 18) / 22;
+            const int inLine = (y - 18) % 22;
+            const int lineLength = 180 + static_cast<int>(hashNoise(uint32_t(line), 0, 13) * 250);
+            if (y >= 18 && line < 4 && inLine < 9 && x > 24 && x < 24 + lineLength) {
+                const int letter = (x - 24) / 9;
+                const bool space = hashNoise(uint32_t(letter), uint32_t(line), 17) < 0.18f;
+                const bool stroke = hashNoise(uint32_t(x), uint32_t(y), 19) < 0.55f;
+                if (!space && stroke && (x - 24) % 9 < 6) colour = vec3(0.55f, 0.57f, 0.52f);
+            }
+            image.setRgb(x, y, colour);
+        }
+    return image;
+}
+
+// A classroom for the VR/AR language classes the project's paper is about: 10 × 8 × 3.2 m,
+// five rows of four desks with chairs facing the board, a teacher's desk, a door, three
+// windows in the +X wall open to the sky and the sun (both from its job file,
+// scenes/classroom.json: glTF has no sky), and six ceiling lamp panels. Plank-textured floor
+// and a chalkboard texture; no TEXCOORD_1: the bake generates the lightmap's charts.
+SceneDescription classroom() {
+    SceneDescription scene;
+    enum { kPlaster, kCeiling, kFloor, kBoard, kWood, kChair, kFrame, kDoor, kLamp };
+    scene.materials = {material("Plaster", vec3(0.72f, 0.70f, 0.64f)),
+                       material("Ceiling", vec3(0.82f)),
+                       material("Floor", vec3(1.0f), vec3(0.0f), 1.0f, "classroom_floor.png", 1.2f),
+                       material("Board", vec3(1.0f), vec3(0.0f), 1.0f, "classroom_board.png", 0.0f),
+                       material("DeskWood", vec3(0.55f, 0.40f, 0.25f)),
+                       material("ChairPlastic", vec3(0.12f, 0.22f, 0.42f)),
+                       material("Frame", vec3(0.25f)),
+                       material("Door", vec3(0.33f, 0.20f, 0.11f)),
+                       material("Lamp", vec3(0.9f), vec3(1.0f, 0.96f, 0.88f), 6.0f)};
+    const float X = 10.0f, Y = 3.2f, Z = -8.0f;
+    const vec3 inside(5.0f, 1.6f, -4.0f);
+    auto face = [&](std::vector<Quad>& quads, vec3 a, vec3 b, vec3 c, vec3 d) { quads.push_back(oriented({a, b, c, d}, inside, true)); };
+    auto mesh = [&](const std::string& name, int material, std::vector<Quad> quads) {
+        scene.meshes.push_back({name, material, std::move(quads), false});
+    };
+    std::vector<Quad> floor, ceiling, walls;
+    face(floor, {0, 0, 0}, {X, 0, 0}, {X, 0, Z}, {0, 0, Z});
+    face(ceiling, {0, Y, 0}, {X, Y, 0}, {X, Y, Z}, {0, Y, Z});
+    face(walls, {0, 0, 0}, {X, 0, 0}, {X, Y, 0}, {0, Y, 0});  // back
+    face(walls, {0, 0, Z}, {X, 0, Z}, {X, Y, Z}, {0, Y, Z});  // front, the board's
+    face(walls, {0, 0, 0}, {0, 0, Z}, {0, Y, Z}, {0, Y, 0});  // −X, the door's
+    // +X: three windows 1.6 m wide from 0.9 m to 2.6 m, centred at z = −1.6, −4.0, −6.4.
+    const float sill = 0.9f, head = 2.6f;
+    face(walls, {X, 0, 0}, {X, 0, Z}, {X, sill, Z}, {X, sill, 0});
+    face(walls, {X, head, 0}, {X, head, Z}, {X, Y, Z}, {X, Y, 0});
+    const float piers[4][2] = {{0.0f, -0.8f}, {-2.4f, -3.2f}, {-4.8f, -5.6f}, {-7.2f, Z}};
+    for (const auto& p : piers) face(walls, {X, sill, p[0]}, {X, sill, p[1]}, {X, head, p[1]}, {X, head, p[0]});
+    mesh("Floor", kFloor, floor);
+    mesh("Ceiling", kCeiling, ceiling);
+    mesh("Walls", kPlaster, walls);
+    std::vector<Quad> board, door;
+    face(board, {2.5f, 0.9f, Z + 0.01f}, {7.5f, 0.9f, Z + 0.01f}, {7.5f, 2.1f, Z + 0.01f}, {2.5f, 2.1f, Z + 0.01f});
+    face(door, {0.01f, 0.0f, -0.8f}, {0.01f, 0.0f, -1.8f}, {0.01f, 2.1f, -1.8f}, {0.01f, 2.1f, -0.8f});
+    mesh("Board", kBoard, board);
+    mesh("Door", kDoor, door);
+
+    // Lamp panels 1.2 × 0.6 m, 1 cm under the ceiling, facing down.
+    std::vector<Quad> lamps;
+    for (float x : {3.0f, 7.0f})
+        for (float z : {-1.8f, -4.2f, -6.6f}) {
+            const float y = Y - 0.01f;
+            lamps.push_back(oriented({vec3(x - 0.6f, y, z - 0.3f), vec3(x + 0.6f, y, z - 0.3f), vec3(x + 0.6f, y, z + 0.3f),
+                                      vec3(x - 0.6f, y, z + 0.3f)},
+                                     vec3(x, 0.0f, z), true));
+        }
+    mesh("LampPanels", kLamp, lamps);
+
+    // Desks (top and two side panels) and chairs (seat, back, two side panels): five rows
+    // of four, the students facing −Z.
+    std::vector<Quad> desks, frames, chairs;
+    auto add = [](std::vector<Quad>& to, const std::vector<Quad>& quads) { to.insert(to.end(), quads.begin(), quads.end()); };
+    for (int row = 0; row < 5; ++row)
+        for (int column = 0; column < 4; ++column) {
+            const float x = 1.6f + 2.25f * float(column), z = -5.6f + 1.05f * float(row);
+            add(desks, boxQuads({x - 0.6f, 0.72f, z - 0.3f}, {x + 0.6f, 0.76f, z + 0.3f}));
+            add(frames, boxQuads({x - 0.58f, 0.0f, z - 0.25f}, {x - 0.55f, 0.72f, z + 0.25f}));
+            add(frames, boxQuads({x + 0.55f, 0.0f, z - 0.25f}, {x + 0.58f, 0.72f, z + 0.25f}));
+            const float cz = z + 0.55f;
+            add(chairs, boxQuads({x - 0.21f, 0.43f, cz - 0.21f}, {x + 0.21f, 0.47f, cz + 0.21f}));
+            add(chairs, boxQuads({x - 0.21f, 0.47f, cz + 0.19f}, {x + 0.21f, 0.88f, cz + 0.22f}));
+            add(frames, boxQuads({x - 0.22f, 0.0f, cz - 0.2f}, {x - 0.2f, 0.43f, cz + 0.2f}));
+            add(frames, boxQuads({x + 0.2f, 0.0f, cz - 0.2f}, {x + 0.22f, 0.43f, cz + 0.2f}));
+        }
+    add(desks, boxQuads({4.0f, 0.0f, -7.2f}, {6.0f, 0.76f, -6.4f}));  // the teacher's
+    mesh("Desks", kWood, desks);
+    mesh("Chairs", kChair, chairs);
+    mesh("Frames", kFrame, frames);
+
+    // From the back of the room, left of the middle, over the last row toward the board,
+    // the windows and their sun on the right.
+    scene.camera.position = vec3(3.6f, 1.8f, -0.2f);
+    scene.camera.yfov = 1.0f;
+    scene.camera.aspectRatio = 1.5f;
+    return scene;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -153,10 +311,14 @@ int main(int argc, char** argv) {
         writeGltf(cornellBox(false), directory, "cornell_box");
         writeGltf(cornellBox(true), directory, "cornell_box_point");
         writeGltf(twoRooms(), directory, "two_rooms");
+        writePngSrgb(plankTexture(), directory + "/classroom_floor.png");
+        writePngSrgb(boardTexture(), directory + "/classroom_board.png");
+        writeGltf(classroom(), directory, "classroom");
     } catch (const std::exception& e) {
         std::fprintf(stderr, "make_scenes: %s\n", e.what());
         return 1;
     }
-    std::printf("wrote cornell_box.gltf, cornell_box_point.gltf and two_rooms.gltf into %s\n", directory.c_str());
+    std::printf("wrote cornell_box.gltf, cornell_box_point.gltf, two_rooms.gltf and classroom.gltf into %s\n",
+                directory.c_str());
     return 0;
 }
