@@ -72,6 +72,13 @@ Light readLight(const json& object, const std::string& where) {
         if (!(glm::length(d) > 0.0f)) throw InputError(where + ".direction is zero");
         light.direction = glm::normalize(d);
     }
+    if (object.contains("angle")) {
+        if (light.type != LightType::Directional) throw InputError(where + ": \"angle\" (a sun's disk) is for directional lights");
+        const float degrees = object["angle"].get<float>();
+        if (!(degrees >= 0.0f && degrees <= 90.0f))
+            throw InputError(where + ".angle: " + std::to_string(degrees) + " is outside 0..90 degrees");
+        light.angularDiameter = degrees * kPi / 180.0f;
+    }
     if (light.type == LightType::Spot) {
         light.innerConeAngle = object.value("innerConeAngle", 0.0f);
         light.outerConeAngle = object.value("outerConeAngle", 0.7853981634f);

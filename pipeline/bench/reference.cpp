@@ -59,12 +59,13 @@ std::string referenceKey(const BakeJob& job, const BenchReferenceSettings& setti
         << " " << b.lightmap.width << "x" << b.lightmap.height << " n" << b.lightmap.subsamplesPerAxis << " tri"
         << b.lightmap.samplePerTriangle << "; images " << b.outputs.images << " " << b.imageWidth << "x" << b.imageHeight
         << "; noise " << settings.targetNoise << " pilot " << settings.pilotSpp << " max " << settings.maxSpp << " budget "
-        << settings.budgetSeconds << " seed " << settings.seed << "; bounces " << PathSettings{}.maxBounces;
+        << settings.budgetSeconds << " seed " << settings.seed << "; bounces " << PathSettings{}.maxBounces << "; sky "
+        << b.sky.x << "," << b.sky.y << "," << b.sky.z;
     for (const Light& l : job.addedLights)
         key << "; light " << l.name << " " << static_cast<int>(l.type) << " " << l.color.x << "," << l.color.y << ","
             << l.color.z << " " << l.intensity << " " << l.range << " " << l.innerConeAngle << " " << l.outerConeAngle
             << " " << l.position.x << "," << l.position.y << "," << l.position.z << " " << l.direction.x << ","
-            << l.direction.y << "," << l.direction.z;
+            << l.direction.y << "," << l.direction.z << " disk " << l.angularDiameter;
     for (const Camera& c : job.addedCameras)
         key << "; camera " << c.position.x << "," << c.position.y << "," << c.position.z << " " << c.forward.x << ","
             << c.forward.y << "," << c.forward.z << " " << c.up.x << "," << c.up.y << "," << c.up.z << " " << c.yfov;

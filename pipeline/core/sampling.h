@@ -27,6 +27,17 @@ VL_HOSTDEV inline vec3 sampleCosineHemisphere(vec2 u) {
     return vec3(d.x, d.y, z);
 }
 
+// The direction in the cone of half-angle acos(cosMax) about +Z that a point of the unit disk
+// stands for, area to solid angle: a uniform point of the disk (sampleConcentricDisk) gives a
+// uniform direction, and compact strata of the square stay compact in the cone.
+VL_HOSTDEV inline vec3 coneDirection(vec2 disk, float cosMax) {
+    const float r2 = glm::min(1.0f, disk.x * disk.x + disk.y * disk.y);
+    const float z = 1.0f - r2 * (1.0f - cosMax);
+    const float r = glm::sqrt(r2);
+    const float s = glm::sqrt(glm::max(0.0f, 1.0f - z * z));
+    return r > 0.0f ? vec3(disk.x / r * s, disk.y / r * s, z) : vec3(0.0f, 0.0f, 1.0f);
+}
+
 VL_HOSTDEV inline vec3 sampleUniformSphere(vec2 u) {
     const float z = 1.0f - 2.0f * u.x;
     const float r = glm::sqrt(glm::max(0.0f, 1.0f - z * z));

@@ -122,7 +122,12 @@ std::vector<KernelLight> kernelLights(const Scene& scene, const LightingSettings
         }
         switch (light.type) {
         case LightType::Point: k.type = lighting::kPointLight; break;
-        case LightType::Directional: k.type = lighting::kDirectionalLight; break;
+        case LightType::Directional:
+            k.type = lighting::kDirectionalLight;
+            if (!(light.angularDiameter >= 0.0f && light.angularDiameter <= 0.5f * kPi))
+                throw InputError(lightLabel(scene, i) + " has an angular diameter outside 0..90°");
+            k.cosHalfAngle = std::cos(0.5f * light.angularDiameter);
+            break;
         case LightType::Spot: {
             k.type = lighting::kSpotLight;
             if (!std::isfinite(light.innerConeAngle) || !std::isfinite(light.outerConeAngle) ||

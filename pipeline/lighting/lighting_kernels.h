@@ -75,6 +75,7 @@ struct KernelLight {
     float spotScale = 0.0f;    // KHR_lights_punctual lightAngleScale
     float spotOffset = 0.0f;   // KHR_lights_punctual lightAngleOffset
     float kc = 0.0f, kl = 0.0f, kq = 1.0f;
+    float cosHalfAngle = 1.0f;  // directional: its disk (scene.h angularDiameter); 1 = one direction
 };
 
 // Emissive triangles are shaded in patches: a quad split along its diagonal (two triangles
@@ -521,6 +522,19 @@ VL_HOSTDEV inline VoxelLighting shadeVoxel(const LightingView& view, IndexAccess
         float distance = 0.0f;
         if (light.type == kDirectionalLight) {
             L = -light.direction;
+            if (light.cosHalfAngle < 1.0f) {
+                // A sun's disk: one direction of its cone per voxel, jittered by the voxel's
+                // own generator; the bounces' gathers average the penumbrae that makes.
+                const ivec3 c = view.coords[i];
+                const uint64_t key = (uint64_t(uint32_t(c.x)) << 42) ^ (uint64_t(uint32_t(c.y)) << 21) ^ uint64_t(uint32_t(c.z));
+                Pcg32 rng = Pcg32::forItem(key, l, 0x53554Eu);  // "SUN"
+                vec2 u;
+                rng.next2D(u.x, u.y);
+                vec3 t, b;
+                orthonormalBasis(L, t, b);
+                const vec3 local = coneDirection(sampleConcentricDisk(u), light.cosHalfAngle);
+                L = glm::normalize(local.x * t + local.y * b + local.z * L);
+            }
         } else {
             const vec3 toLight = light.position - surface;
             const float d = glm::length(toLight);

@@ -98,6 +98,10 @@ struct Light {
     float outerConeAngle = 0.7853981634f;
     vec3 position{0.0f};            // world space
     vec3 direction{0.0f, 0.0f, -1.0f};  // unit, the direction the light travels (node −Z)
+    // A directional light's disk as seen from the scene (Cycles' sun "angle"), radians: its
+    // irradiance comes evenly from a cone of this diameter, so shadows have penumbrae. 0: a
+    // single direction. glTF has none; a job file's light sets it ("angle", degrees).
+    float angularDiameter = 0.0f;
 
     vec3 radiantIntensity() const { return color * intensity; }
 };

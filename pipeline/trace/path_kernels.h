@@ -56,47 +56,60 @@ VL_HOSTDEV inline float rangeWindow(float distance2, float range) {
     return glm::clamp(1.0f - ratio2 * ratio2, 0.0f, 1.0f);
 }
 
-// Σ over punctual lights of incident radiance × cos θ at a point (irradiance contributions,
-// shadowed), for a diffuse lobe about ns on the side of ng.
-VL_HOSTDEV inline vec3 punctualIrradiance(const TraceSceneView& s, const BvhView& bvh, const vec3& p,
-                                          const vec3& ng, const vec3& ns) {
-    vec3 sum(0.0f);
-    for (uint32_t i = 0; i < s.lightCount; ++i) {
-        const TraceLight& light = s.lights[i];
-        vec3 wi;
-        vec3 e;
-        vec3 target(0.0f);
-        bool toInfinity = false;
-        if (light.type == TraceLightType::Directional) {
-            wi = -light.direction;
-            e = light.intensity;
-            toInfinity = true;
-        } else {
-            const vec3 d = light.position - p;
-            const float r2 = glm::dot(d, d);
-            if (!(r2 > 0.0f)) continue;
-            wi = d / glm::sqrt(r2);
-            float falloff = rangeWindow(r2, light.range) / r2;
-            if (light.type == TraceLightType::Spot) {
-                const float t = glm::clamp(glm::dot(light.direction, -wi) * light.spotScale + light.spotOffset, 0.0f, 1.0f);
-                falloff *= t * t;
-            }
-            e = light.intensity * falloff;
-            target = light.position;
+// One punctual light's incident radiance × cos θ at a point (irradiance, shadowed), for a
+// diffuse lobe about ns on the side of ng. A directional light with a disk (cosHalfAngle < 1)
+// arrives from the direction of its cone that `disk`, a point of the unit disk, stands for
+// (coneDirection): its mean over uniform points of the disk is the disk's irradiance,
+// penumbrae included.
+VL_HOSTDEV inline vec3 punctualLightIrradiance(const BvhView& bvh, const TraceLight& light, const vec3& p,
+                                               const vec3& ng, const vec3& ns, vec2 disk) {
+    vec3 wi;
+    vec3 e;
+    vec3 target(0.0f);
+    bool toInfinity = false;
+    if (light.type == TraceLightType::Directional) {
+        wi = -light.direction;
+        if (light.cosHalfAngle < 1.0f) {
+            vec3 t, b;
+            orthonormalBasis(wi, t, b);
+            const vec3 local = coneDirection(disk, light.cosHalfAngle);
+            wi = glm::normalize(local.x * t + local.y * b + local.z * wi);
         }
-        const float cosS = glm::dot(ns, wi);
-        if (cosS <= 0.0f || glm::dot(ng, wi) <= 0.0f || !(maxComponent(e) > 0.0f)) continue;
-        bool blocked;
-        if (toInfinity) {
-            Ray ray;
-            ray.origin = offsetRayOrigin(p, ng, bvh.extent);
-            ray.direction = wi;
-            blocked = intersectAny(bvh, ray);
-        } else {
-            blocked = occluded(bvh, p, ng, target, vec3(0.0f));
+        e = light.intensity;
+        toInfinity = true;
+    } else {
+        const vec3 d = light.position - p;
+        const float r2 = glm::dot(d, d);
+        if (!(r2 > 0.0f)) return vec3(0.0f);
+        wi = d / glm::sqrt(r2);
+        float falloff = rangeWindow(r2, light.range) / r2;
+        if (light.type == TraceLightType::Spot) {
+            const float t = glm::clamp(glm::dot(light.direction, -wi) * light.spotScale + light.spotOffset, 0.0f, 1.0f);
+            falloff *= t * t;
         }
-        if (!blocked) sum += e * cosS;
+        e = light.intensity * falloff;
+        target = light.position;
     }
+    const float cosS = glm::dot(ns, wi);
+    if (cosS <= 0.0f || glm::dot(ng, wi) <= 0.0f || !(maxComponent(e) > 0.0f)) return vec3(0.0f);
+    bool blocked;
+    if (toInfinity) {
+        Ray ray;
+        ray.origin = offsetRayOrigin(p, ng, bvh.extent);
+        ray.direction = wi;
+        blocked = intersectAny(bvh, ray);
+    } else {
+        blocked = occluded(bvh, p, ng, target, vec3(0.0f));
+    }
+    return blocked ? vec3(0.0f) : e * cosS;
+}
+
+// Σ over punctual lights, a sun's disk sampled uniformly at `u` ∈ [0, 1)².
+VL_HOSTDEV inline vec3 punctualIrradiance(const TraceSceneView& s, const BvhView& bvh, const vec3& p,
+                                          const vec3& ng, const vec3& ns, vec2 u) {
+    const vec2 disk = sampleConcentricDisk(u);
+    vec3 sum(0.0f);
+    for (uint32_t i = 0; i < s.lightCount; ++i) sum += punctualLightIrradiance(bvh, s.lights[i], p, ng, ns, disk);
     return sum;
 }
 
@@ -167,7 +180,9 @@ VL_HOSTDEV inline void continuePath(const TraceSceneView& s, const BvhView& bvh,
         const bool delta = lobe.lobe != Lobe::Diffuse;
         if (!delta) {
             const vec3 fOverPi = beta * lobe.weight * kInvPi;
-            vec3 incident = punctualIrradiance(s, bvh, h.position, ng, ns);
+            vec2 sun(0.0f);
+            if (s.sunDisks > 0) rng.next2D(sun.x, sun.y);
+            vec3 incident = punctualIrradiance(s, bvh, h.position, ng, ns, sun);
             incident += emitterIrradianceSample(s, bvh, h.position, ng, ns, rng);
             const vec3 contribution = fOverPi * incident;
             if (isFinite(contribution)) sink += contribution;

@@ -51,6 +51,7 @@ TraceLight convertLight(const Light& light) {
     out.position = light.position;
     out.direction = glm::normalize(light.direction);
     out.range = light.range > 0.0f ? light.range : 0.0f;
+    if (light.type == LightType::Directional) out.cosHalfAngle = std::cos(0.5f * light.angularDiameter);
     if (light.type == LightType::Spot) {
         // glTF KHR_lights_punctual's recommended smooth falloff between the cones.
         const float cosOuter = std::cos(light.outerConeAngle);
@@ -156,6 +157,8 @@ TraceScene TraceScene::build(const Scene& scene, const SceneTriangles& triangles
     for (const Light& light : scene.lights) {
         if (!isFinite(light.radiantIntensity()) || !isFinite(light.position) || !isFinite(light.direction))
             throw InputError(scene.sourcePath + ": light '" + light.name + "' has a value that is not finite");
+        if (!(light.angularDiameter >= 0.0f && light.angularDiameter <= 0.5f * kPi))
+            throw InputError(scene.sourcePath + ": light '" + light.name + "' has an angular diameter outside 0..90°");
         out.lights.push_back(convertLight(light));
     }
 
@@ -243,6 +246,7 @@ TraceSceneView TraceScene::view() const {
     v.emitterQuad = emitterQuad.empty() ? nullptr : emitterQuad.data();
     v.emitterCount = static_cast<uint32_t>(emitters.size());
     v.skyRadiance = skyRadiance;
+    for (const TraceLight& light : lights) v.sunDisks += light.cosHalfAngle < 1.0f ? 1 : 0;
     return v;
 }
 

@@ -55,6 +55,7 @@ struct TraceLight {
     float range = 0.0f;        // 0 = infinite
     float spotScale = 0.0f;    // glTF smooth spot falloff: t = clamp(cos·scale + offset, 0, 1), factor t²
     float spotOffset = 1.0f;
+    float cosHalfAngle = 1.0f;  // directional: its disk's half-angle (scene.h angularDiameter); 1 = a point
 };
 
 struct TraceSceneView {
@@ -85,6 +86,9 @@ struct TraceSceneView {
     uint32_t emitterCount = 0;
 
     vec3 skyRadiance{0.0f};  // Scene::sky: what a ray that leaves the scene sees
+    // Some directional light has a disk (TraceLight::cosHalfAngle < 1): only then do paths
+    // draw a point of it, so scenes without one keep their random sequences.
+    int sunDisks = 0;
 };
 
 constexpr int8_t kQuadSingle = 0, kQuadFirstHalf = 1, kQuadSecondHalf = 2;

@@ -1,9 +1,10 @@
-// A uniform sky (scene.h Sky) in every stage: the path tracer's escaping paths, the
+// A uniform sky (scene.h Sky) and a sun with a disk (Light::angularDiameter) in every stage: the path tracer's escaping paths, the
 // receivers' direct term, the bounces' voxel light and the camera's background, against the
 // closed form of an open floor and against Cycles on the open Cornell box of
 // ../shared/reference (cornell_sky.gltf, world radiance (0.6, 0.75, 1.0)).
 #include "bake/bake.h"
 #include "bake/bake_settings.h"
+#include "bake/direct_light.h"
 #include "bake/job_file.h"
 #include "bake/receivers.h"
 #include "core/error.h"
@@ -174,4 +175,87 @@ TEST_CASE("A sky is set globally or per scene in a job file and refused when mal
     CHECK_THROWS_WITH(applySetting(bakeSettingsTable(), settings, "sky", "1,2"), Catch::Contains("not R,G,B"));
     CHECK_THROWS_WITH(applySetting(bakeSettingsTable(), settings, "sky", "nan"), Catch::Contains("sky"));
     CHECK_THROWS_WITH(applySetting(bakeSettingsTable(), settings, "sky", "2e9"), Catch::Contains("at most 1e9"));
+}
+
+TEST_CASE("A sun with a disk: exact where wholly seen, its penumbra the disk's visible share", "[bake]") {
+    // A sun straight overhead with a 10° disk over a floor, a ledge 0.5 m up over x < 0. A
+    // floor point at x sees the part of the disk beyond the ledge's edge: at angular offset
+    // x/h from the disk's centre (small angles: the cone is a flat disk of radius α = 5°),
+    // the share of a disk on one side of a chord, (α² acos(d/α) − d√(α² − d²)) / (πα²).
+    Scene scene;
+    const int white = addLambert(scene, vec3(0.5f));
+    addQuad(scene, "floor", white, vec3(-2, 0, -2), vec3(-2, 0, 2), vec3(2, 0, 2), vec3(2, 0, -2));
+    addQuad(scene, "ledge", white, vec3(-2, 0.5f, -2), vec3(-2, 0.5f, 2), vec3(0, 0.5f, 2), vec3(0, 0.5f, -2));
+    Light sun;
+    sun.type = LightType::Directional;
+    sun.direction = vec3(0, -1, 0);
+    sun.intensity = 10.0f;
+    sun.angularDiameter = 10.0f * kPi / 180.0f;
+    scene.lights.push_back(sun);
+    const SceneTriangles triangles = gatherTriangles(scene);
+    const Bvh bvh = Bvh::build(triangles);
+    const TraceScene trace = TraceScene::build(scene, triangles);
+    const float alpha = 0.5f * sun.angularDiameter, h = 0.5f;
+    const float whole = 10.0f * 0.5f * (1.0f + std::cos(alpha));  // E · the cone's mean cosine
+    DirectLightSettings settings;
+    double squares = 0.0, worstLit = 0.0, worstDark = 0.0;
+    int penumbra = 0;
+    for (int i = 0; i < 200; ++i) {
+        SurfaceSample r;
+        r.position = vec3(-0.1f + 0.2f * (i + 0.5f) / 200.0f, 0.0f, 0.3f * std::sin(float(i)));
+        r.normal = vec3(0, 1, 0);
+        r.triangle = 0;
+        const float e = directIrradiance(trace.view(), bvh.view(), r, settings, uint64_t(i)).x;
+        const double d = std::atan(double(r.position.x) / h);  // the edge's offset from the disk's centre
+        double share;
+        if (d >= alpha) share = 1.0;
+        else if (d <= -alpha) share = 0.0;
+        else {
+            const double c = d;  // hidden: the disk's part beyond −d, a cap at distance d (signed)
+            const double hidden = (alpha * alpha * std::acos(c / alpha) - c * std::sqrt(alpha * alpha - c * c)) /
+                                  (M_PI * alpha * alpha);
+            share = 1.0 - hidden;
+        }
+        if (share == 1.0) worstLit = std::max(worstLit, std::abs(double(e) - whole) / whole);
+        else if (share == 0.0) worstDark = std::max(worstDark, double(e));
+        else {
+            squares += (e / whole - share) * (e / whole - share);
+            ++penumbra;
+        }
+    }
+    const double rms = std::sqrt(squares / penumbra);
+    INFO(penumbra << " receivers in the penumbra: RMS error " << rms << " of the whole sun");
+    REQUIRE(penumbra > 50);
+    CHECK(rms < 0.05);
+    CHECK(worstLit < 1e-5);
+    CHECK(worstDark == 0.0);
+
+    // The path tracer's mean at a wholly lit point: E · the cone's mean cosine, within its noise.
+    const vec3 p(0.5f, 0.0f, 0.0f);
+    Pcg32 rng(1, 2);
+    double sum = 0.0;
+    const int n = 4096;
+    for (int k = 0; k < n; ++k) {
+        vec2 u;
+        rng.next2D(u.x, u.y);
+        sum += punctualIrradiance(trace.view(), bvh.view(), p, vec3(0, 1, 0), vec3(0, 1, 0), u).x;
+    }
+    CHECK(sum / n == Approx(whole).epsilon(1e-4));
+}
+
+TEST_CASE("A job file's sun takes an angle in degrees, for directional lights only", "[bake]") {
+    const fs::path dir = tempDir("job-sun");
+    std::ofstream(dir / "job.json") << R"({"scenes": [{"path": "a.gltf", "lights": [
+        {"type": "directional", "direction": [0, -1, 0], "intensity": 5, "angle": 0.526}]}]})";
+    const std::vector<BakeJob> jobs = readJobFile((dir / "job.json").string(), BakeSettings{}, "output");
+    REQUIRE(jobs.at(0).addedLights.size() == 1);
+    CHECK(jobs[0].addedLights[0].angularDiameter == Approx(0.526 * M_PI / 180.0));
+    std::ofstream(dir / "point.json") << R"({"scenes": [{"path": "a.gltf", "lights": [
+        {"type": "point", "position": [0, 1, 0], "angle": 1}]}]})";
+    CHECK_THROWS_WITH(readJobFile((dir / "point.json").string(), BakeSettings{}, "output"),
+                      Catch::Contains("point.json") && Catch::Contains("lights[0]") && Catch::Contains("directional"));
+    std::ofstream(dir / "wide.json") << R"({"scenes": [{"path": "a.gltf", "lights": [
+        {"type": "directional", "direction": [0, -1, 0], "angle": 120}]}]})";
+    CHECK_THROWS_WITH(readJobFile((dir / "wide.json").string(), BakeSettings{}, "output"),
+                      Catch::Contains("wide.json") && Catch::Contains("0..90"));
 }

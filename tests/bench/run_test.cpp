@@ -295,6 +295,17 @@ TEST_CASE("A path-traced bench reference is cached under the content of the scen
     CHECK(second.lightmapSpp == first.lightmapSpp);
     job.settings.imageWidth = 20;  // another image size is another reference
     CHECK_FALSE(prepareBenchReference(job, {}, settings).fromCache);
+    job.settings.sky = vec3(0.5f);  // so is another sky
+    const BenchReference skyLit = prepareBenchReference(job, {}, settings);
+    CHECK_FALSE(skyLit.fromCache);
+    Light sun;  // and another sun's disk
+    sun.type = LightType::Directional;
+    sun.direction = vec3(0, -1, 0);
+    job.addedLights = {sun};
+    CHECK_FALSE(prepareBenchReference(job, {}, settings).fromCache);
+    job.addedLights[0].angularDiameter = 0.01f;
+    CHECK_FALSE(prepareBenchReference(job, {}, settings).fromCache);
+    CHECK(prepareBenchReference(job, {}, settings).fromCache);
 }
 
 TEST_CASE("Bench time to reach an error follows the Pareto front on log-log axes", "[bench]") {
