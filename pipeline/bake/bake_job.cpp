@@ -237,7 +237,7 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
             for (const BakedLightmap& lightmap : result.lightmaps)
                 lightmaps.push_back({lightmap.name, lightmap.meshes, encodeRgbm(lightmap.total)});
             writeLightmappedGlb(sourcePath, meshSources, result.generatedLayouts, lightmaps, job.addedCameras, p,
-                                diagnostics);
+                                diagnostics, settings.sky);
         });
     files.writeAll();
     report.stages.push_back({"write", std::chrono::duration<double>(std::chrono::steady_clock::now() - writeStart).count()});

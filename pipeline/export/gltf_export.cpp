@@ -349,7 +349,8 @@ void addCameras(tinygltf::Model& model, const std::vector<Camera>& cameras) {
 
 void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Source>& meshes,
                          const std::vector<GeneratedLayout>& layouts, const std::vector<ExportedLightmap>& lightmaps,
-                         const std::vector<Camera>& addedCameras, const std::string& path, Diagnostics& diagnostics) {
+                         const std::vector<Camera>& addedCameras, const std::string& path, Diagnostics& diagnostics,
+                         const vec3& sky) {
     if (!layouts.empty() && layouts.size() != meshes.size())
         throw Error("writeLightmappedGlb: " + std::to_string(layouts.size()) + " layouts for " +
                     std::to_string(meshes.size()) + " meshes");
@@ -367,6 +368,16 @@ void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Sour
     addCameras(model, addedCameras);
     giveFarPlanes(model);
 
+    if (maxComponent(sky) > 0.0f && !model.scenes.empty()) {
+        tinygltf::Scene& shown = model.scenes[size_t(std::max(model.defaultScene, 0))];
+        tinygltf::Value::Object extras = shown.extras.IsObject() ? shown.extras.Get<tinygltf::Value::Object>()
+                                                                   : tinygltf::Value::Object{};
+        tinygltf::Value::Object voxlight;
+        voxlight["sky"] = tinygltf::Value(tinygltf::Value::Array{tinygltf::Value(double(sky.x)), tinygltf::Value(double(sky.y)),
+                                                                 tinygltf::Value(double(sky.z))});
+        extras["voxlight"] = tinygltf::Value(voxlight);
+        shown.extras = tinygltf::Value(extras);
+    }
     model.asset.generator = std::string("voxlight ") + VOXLIGHT_VERSION;
     model.buffers.assign(1, tinygltf::Buffer());
     model.buffers[0].data = std::move(bin.data());

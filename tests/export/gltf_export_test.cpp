@@ -72,6 +72,16 @@ TEST_CASE("glTF out holds the scene's buffers and images in one .glb and points 
     CHECK(back.meshes[0].indices == scene.meshes[0].indices);
     CHECK(back.meshes[0].positions == scene.meshes[0].positions);
     CHECK(back.warnings == scene.warnings);
+    CHECK_FALSE(after.scenes.at(0).extras.Has("voxlight"));  // no sky, nothing said of one
+
+    // A bake under a sky says so in the scene's extras, for viewers (glTF has no sky).
+    writeLightmappedGlb(source, sources, {}, {grey("lightmap", {0}, 3.0f)}, {}, out, diagnostics, vec3(0.6f, 0.75f, 1.0f));
+    const tinygltf::Model skyLit = reread(out);
+    const tinygltf::Value& sky = skyLit.scenes.at(0).extras.Get("voxlight").Get("sky");
+    REQUIRE(sky.ArrayLen() == 3);
+    CHECK(sky.Get(0).GetNumberAsDouble() == Approx(0.6));
+    CHECK(sky.Get(1).GetNumberAsDouble() == Approx(0.75));
+    CHECK(sky.Get(2).GetNumberAsDouble() == Approx(1.0));
 }
 
 TEST_CASE("glTF out copies a material that serves several lightmaps or unlit primitives", "[export]") {

@@ -319,6 +319,18 @@ async function main() {
   if (threeMaterials) renderer.outputColorSpace = THREE.SRGBColorSpace;
   const counts = threeMaterials ? { meshes: await applyMozLightmaps(gltf), unlit: 0 } : await applyBakedMaterials(gltf, shared);
   const world = gltf.scene;
+  // A bake under a uniform sky writes its radiance into the scene's extras (glTF has no sky):
+  // lit, the background is that sky, with the exposure and the sRGB curve the shader applies.
+  const sky = world.userData?.voxlight?.sky;
+  const skyBackground = () => {
+    if (!sky || shared.mode.value !== 0 || threeMaterials) return renderer.setClearColor(0x000000);
+    const srgb = sky.map((c) => {
+      const v = Math.min(Math.max(c * shared.exposure.value, 0), 1);
+      return v <= 0.0031308 ? v * 12.92 : 1.055 * Math.pow(v, 1 / 2.4) - 0.055;
+    });
+    // Linear working space and linear output: the encoded bytes pass through as the shader's do.
+    renderer.setClearColor(new THREE.Color().setRGB(srgb[0], srgb[1], srgb[2], THREE.LinearSRGBColorSpace));
+  };
   const cameras = glTFCameras(gltf);
   const box = new THREE.Box3().setFromObject(world);
   const size = box.getSize(new THREE.Vector3()).length() || 1;
@@ -330,6 +342,7 @@ async function main() {
 
   if (capturing) {
     if (chosen >= 0 && params.has('camera') && !cameras[chosen]) throw new Error(`the scene has no camera ${chosen} (it has ${cameras.length})`);
+    skyBackground();
     renderer.render(world, view);
     const blob = await new Promise((resolve) => renderer.domElement.toBlob(resolve, 'image/png'));
     await fetch('/capture', { method: 'POST', body: blob });
@@ -417,6 +430,7 @@ async function main() {
       walk.moveRight(speed * (axis('KeyD', 'KeyA') + axis('ArrowRight', 'ArrowLeft')));
       view.position.y += speed * axis('KeyE', 'KeyQ');
     }
+    skyBackground();
     renderer.render(world, view);
     if (capturingPage && ++frames === 2) fetch('/ready', { method: 'POST' });
   });
