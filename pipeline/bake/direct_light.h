@@ -37,6 +37,21 @@ struct DirectLightSettings {
     int skyStrata = 10;
 };
 
+// cos θ_r · cos θ_e / d² between a receiver (p; geometric normal ng, shading normal ns) and
+// a point q of an emitter whose front faces `towardReceiver`, wi the unit direction to q; 0
+// where q lies under either horizon or on p.
+VL_HOSTDEV inline float geometricFactor(const vec3& p, const vec3& ng, const vec3& ns, const vec3& q,
+                                        const vec3& towardReceiver, vec3& wi) {
+    const vec3 d = q - p;
+    const float dist2 = glm::dot(d, d);
+    if (!(dist2 > 0.0f)) return 0.0f;
+    wi = d / glm::sqrt(dist2);
+    const float cosR = glm::dot(ns, wi);
+    const float cosE = -glm::dot(towardReceiver, wi);
+    if (cosR <= 0.0f || cosE <= 0.0f || glm::dot(ng, wi) <= 0.0f) return 0.0f;
+    return cosR * cosE / dist2;
+}
+
 // Irradiance from emissive triangle `emitter` at receiver (p, ng, ns): ng is the geometric
 // normal on the receiving side, ns the shading normal. Stratum (i, j) of the n × n points is
 // jittered by its own generator (seed, `stream`·n² + its index).
@@ -96,20 +111,12 @@ VL_HOSTDEV inline vec3 emitterIrradiance(const TraceSceneView& s, const BvhView&
     vec3 sampled(0.0f), sampledVisible(0.0f);
     for (int i = 0; i < strata; ++i)
         for (int j = 0; j < strata; ++j) {
-            Pcg32 rng = Pcg32::forItem(seed, stream * uint64_t(strata * strata) + uint64_t(i * strata + j), 0xD1EC7u);
-            vec2 u;
-            rng.next2D(u.x, u.y);
-            u = (vec2(float(i), float(j)) + u) / static_cast<float>(strata);
-            const vec2 b = sampleUniformTriangle(u);
+            const vec2 b = sampleUniformTriangle(jitteredStratum(seed, stream, strata, i, j, 0xD1EC7u));
             const SurfaceHit point = surfaceAt(s, emitter, b.x, b.y);
-            const vec3 d = point.position - p;
-            const float dist2 = glm::dot(d, d);
-            if (!(dist2 > 0.0f)) continue;
-            const vec3 wi = d / glm::sqrt(dist2);
-            const float cosR = glm::dot(ns, wi);
-            const float cosE = -glm::dot(towardReceiver, wi);
-            if (cosR <= 0.0f || cosE <= 0.0f || glm::dot(ng, wi) <= 0.0f) continue;
-            const vec3 f = emissionAt(s, point, -wi) * (cosR * cosE * pointArea / dist2);
+            vec3 wi;
+            const float g = geometricFactor(p, ng, ns, point.position, towardReceiver, wi);
+            if (!(g > 0.0f)) continue;
+            const vec3 f = emissionAt(s, point, -wi) * (g * pointArea);
             sampled += f;
             if (!occluded(bvh, p, ng, point.position, towardReceiver)) sampledVisible += f;
         }
@@ -176,19 +183,11 @@ VL_HOSTDEV inline vec3 emitterQuadIrradiance(const TraceSceneView& s, const BvhV
     float sampled = 0.0f, sampledVisible = 0.0f;
     for (int i = 0; i < m; ++i)
         for (int j = 0; j < m; ++j) {
-            Pcg32 rng = Pcg32::forItem(seed, stream * uint64_t(m * m) + uint64_t(i * m + j), 0xD1EC7u);
-            vec2 u;
-            rng.next2D(u.x, u.y);
-            u = (vec2(float(i), float(j)) + u) / static_cast<float>(m);
+            const vec2 u = jitteredStratum(seed, stream, m, i, j, 0xD1EC7u);
             const vec3 point = origin + u.x * edge1 + u.y * edge2;
-            const vec3 d = point - p;
-            const float dist2 = glm::dot(d, d);
-            if (!(dist2 > 0.0f)) continue;
-            const vec3 wi = d / glm::sqrt(dist2);
-            const float cosR = glm::dot(ns, wi);
-            const float cosE = -glm::dot(towardReceiver, wi);
-            if (cosR <= 0.0f || cosE <= 0.0f || glm::dot(ng, wi) <= 0.0f) continue;
-            const float f = cosR * cosE / dist2;
+            vec3 wi;
+            const float f = geometricFactor(p, ng, ns, point, towardReceiver, wi);
+            if (!(f > 0.0f)) continue;
             sampled += f;
             if (!occluded(bvh, p, ng, point, towardReceiver)) sampledVisible += f;
         }
@@ -208,12 +207,8 @@ VL_HOSTDEV inline vec3 skyIrradiance(const TraceSceneView& s, const BvhView& bvh
     int open = 0;
     for (int i = 0; i < strata; ++i)
         for (int j = 0; j < strata; ++j) {
-            Pcg32 rng = Pcg32::forItem(seed, uint64_t(i * strata + j), 0x534B59u);  // "SKY"
-            vec2 u;
-            rng.next2D(u.x, u.y);
-            u = (vec2(float(i), float(j)) + u) / static_cast<float>(strata);
             Ray ray;
-            ray.direction = sampleDiffuseDirection(ns, u);
+            ray.direction = sampleDiffuseDirection(ns, jitteredStratum(seed, 0, strata, i, j, 0x534B59u));  // "SKY"
             if (!(glm::dot(ray.direction, ng) > 0.0f)) continue;
             ray.origin = offsetRayOrigin(p, ng, bvh.extent);
             if (!intersectAny(bvh, ray)) ++open;
@@ -248,11 +243,7 @@ VL_HOSTDEV inline vec3 sunIrradiance(const BvhView& bvh, const TraceLight& light
     vec3 sum(0.0f);
     for (int a = 0; a < strata; ++a)
         for (int b = 0; b < strata; ++b) {
-            Pcg32 rng = Pcg32::forItem(seed, uint64_t(lightIndex) * uint64_t(strata * strata) + uint64_t(a * strata + b),
-                                       0x53554Eu);  // "SUN"
-            vec2 u;
-            rng.next2D(u.x, u.y);
-            const vec2 disk = sampleConcentricDisk((vec2(float(a), float(b)) + u) / float(strata));
+            const vec2 disk = sampleConcentricDisk(jitteredStratum(seed, lightIndex, strata, a, b, 0x53554Eu));  // "SUN"
             sum += punctualLightIrradiance(bvh, light, p, ng, ns, disk);
         }
     return sum / float(strata * strata);

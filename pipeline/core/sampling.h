@@ -2,6 +2,7 @@
 #pragma once
 
 #include "core/math.h"
+#include "core/rng.h"
 
 namespace vl {
 
@@ -49,6 +50,15 @@ VL_HOSTDEV inline vec3 sampleUniformSphere(vec2 u) {
 VL_HOSTDEV inline vec2 sampleUniformTriangle(vec2 u) {
     const float su = glm::sqrt(u.x);
     return vec2(1.0f - su, u.y * su);
+}
+
+// The point of stratum (i, j) of an n × n grid over [0, 1)², jittered by a generator of its
+// own (seed, sample stream·n² + i·n + j, salt): the same point whatever thread asks.
+VL_HOSTDEV inline vec2 jitteredStratum(uint64_t seed, uint64_t stream, int n, int i, int j, uint64_t salt) {
+    Pcg32 rng = Pcg32::forItem(seed, stream * uint64_t(n * n) + uint64_t(i * n + j), salt);
+    vec2 u;
+    rng.next2D(u.x, u.y);
+    return (vec2(float(i), float(j)) + u) / static_cast<float>(n);
 }
 
 // Tent filter of ERRATA eq. (11): maps ξ ∈ [0,1) to an offset in [-1, 1).

@@ -35,7 +35,8 @@ TEST_CASE("A quad light's penumbra at the receivers: one square grid over the qu
     TraceSceneView asTriangles = asQuad;
     asTriangles.emitterQuad = nullptr;
 
-    DirectLightSettings settings;  // 4 × 4 a triangle: 32 points; the quad ⌈4√2⌉² = 36
+    DirectLightSettings settings;
+    settings.emitterStrata = 4;  // 4 × 4 a triangle: 32 points; the quad ⌈4√2⌉² = 36
     double squaresQuad = 0.0, squaresTriangles = 0.0, worstLit = 0.0;
     int penumbra = 0;
     for (int i = 0; i < 400; ++i) {

@@ -12,6 +12,7 @@
 #include "metrics/metrics.h"
 #include "scene/gltf_loader.h"
 #include "support/paths.h"
+#include "tests/trace/pt_scenes.h"
 #include "support/skip.h"
 #include "quad_scene.h"
 #include "trace/bvh.h"
@@ -31,6 +32,13 @@ namespace fs = std::filesystem;
 namespace {
 
 const vec3 kSky(0.6f, 0.75f, 1.0f);
+
+PathTracerSettings quietPaths(int spp) {
+    PathTracerSettings path;
+    path.samplesPerPixel = spp;
+    path.quiet = true;
+    return path;
+}
 
 }  // namespace
 
@@ -63,14 +71,9 @@ TEST_CASE("A floor open to a uniform sky receives pi L: the bake's texels and th
 
     // The path tracer: every path's first bounce leaves the scene, exactly L.
     scene.sky.radiance = kSky;
-    const SceneTriangles triangles = gatherTriangles(scene);
-    const Bvh bvh = Bvh::build(triangles);
-    const TraceScene trace = TraceScene::build(scene, triangles);
+    const TraceFixture f(scene);
     const LightmapAtlas atlas = buildLightmapReceivers(scene, settings.lightmap, diagnostics).at(0);
-    PathTracerSettings path;
-    path.samplesPerPixel = 4;
-    path.quiet = true;
-    const TraceResult traced = traceIrradiance(trace, bvh, atlas.receivers, path);
+    const TraceResult traced = traceIrradiance(f.trace, f.bvh, atlas.receivers, quietPaths(4));
     double worstTraced = 0.0;
     for (int y = 0; y < 32; ++y)
         for (int x = 0; x < 32; ++x)
@@ -133,16 +136,12 @@ TEST_CASE("The open Cycles Cornell box under a uniform sky: the bake and the pat
 
     // The path tracer's means within 1% of Cycles' (issue 16), lightmap and render.
     scene.sky.radiance = kSky;
-    const SceneTriangles triangles = gatherTriangles(scene);
-    const Bvh bvh = Bvh::build(triangles);
-    const TraceScene trace = TraceScene::build(scene, triangles);
+    const TraceFixture f(scene);
     const LightmapAtlas atlas = buildLightmapReceivers(scene, settings.lightmap, diagnostics).at(0);
-    PathTracerSettings path;
-    path.samplesPerPixel = 16;
-    path.quiet = true;
+    PathTracerSettings path = quietPaths(16);
     path.filter = PixelFilter::Box;
-    const TraceResult lightmap = traceIrradiance(trace, bvh, atlas.receivers, path);
-    const TraceResult render = renderCamera(trace, bvh, makeCameraModel(scene.cameras.at(0), 256, 256), path);
+    const TraceResult lightmap = traceIrradiance(f.trace, f.bvh, atlas.receivers, path);
+    const TraceResult render = renderCamera(f.trace, f.bvh, makeCameraModel(scene.cameras.at(0), 256, 256), path);
     const ErrorMetrics tracedLightmap = compareImages(lightmap.beauty, reference, options);
     const ErrorMetrics tracedRender = compareImages(render.beauty, referenceRender, MetricOptions{});
     for (int c = 0; c < 3; ++c) {
@@ -192,9 +191,7 @@ TEST_CASE("A sun with a disk: exact where wholly seen, its penumbra the disk's v
     sun.intensity = 10.0f;
     sun.angularDiameter = 10.0f * kPi / 180.0f;
     scene.lights.push_back(sun);
-    const SceneTriangles triangles = gatherTriangles(scene);
-    const Bvh bvh = Bvh::build(triangles);
-    const TraceScene trace = TraceScene::build(scene, triangles);
+    const TraceFixture f(scene);
     const float alpha = 0.5f * sun.angularDiameter, h = 0.5f;
     const float whole = 10.0f * 0.5f * (1.0f + std::cos(alpha));  // E · the cone's mean cosine
     DirectLightSettings settings;
@@ -205,7 +202,7 @@ TEST_CASE("A sun with a disk: exact where wholly seen, its penumbra the disk's v
         r.position = vec3(-0.1f + 0.2f * (i + 0.5f) / 200.0f, 0.0f, 0.3f * std::sin(float(i)));
         r.normal = vec3(0, 1, 0);
         r.triangle = 0;
-        const float e = directIrradiance(trace.view(), bvh.view(), r, settings, uint64_t(i)).x;
+        const float e = directIrradiance(f.trace.view(), f.bvh.view(), r, settings, uint64_t(i)).x;
         const double d = std::atan(double(r.position.x) / h);  // the edge's offset from the disk's centre
         double share;
         if (d >= alpha) share = 1.0;
@@ -238,7 +235,7 @@ TEST_CASE("A sun with a disk: exact where wholly seen, its penumbra the disk's v
     for (int k = 0; k < n; ++k) {
         vec2 u;
         rng.next2D(u.x, u.y);
-        sum += punctualIrradiance(trace.view(), bvh.view(), p, vec3(0, 1, 0), vec3(0, 1, 0), u).x;
+        sum += punctualIrradiance(f.trace.view(), f.bvh.view(), p, vec3(0, 1, 0), vec3(0, 1, 0), u).x;
     }
     CHECK(sum / n == Approx(whole).epsilon(1e-4));
 }

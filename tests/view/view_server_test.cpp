@@ -61,11 +61,12 @@ Reply get(uint16_t port, const std::string& path, const std::string& host = "") 
     return httpExchange(port, "GET " + path + " HTTP/1.1\r\nHost: " + named + "\r\n\r\n");
 }
 
-// A bake output (scene.glb, bake.json), a secret beside it and a link out of it.
+// A bake output (scene.glb, bake.json), a secret beside it and a link out of it, in a folder
+// of the test's own (ctest runs the test cases side by side: one shared folder raced).
 struct Site {
     fs::path root, output;
-    Site() {
-        root = test::tempDir("view-server");
+    explicit Site(const std::string& name) {
+        root = test::tempDir("view-server-" + name);
         fs::remove_all(root);
         output = root / "output";
         writeFile(output / "scene.glb", "glTF-bytes");
@@ -78,7 +79,7 @@ struct Site {
 }  // namespace
 
 TEST_CASE("The viewer's file lookup refuses every path that leaves its folder", "[view]") {
-    const Site site;
+    const Site site("lookup");
     CHECK(fileBelow(site.output, "/scene.glb") == fs::canonical(site.output / "scene.glb"));
     CHECK(fileBelow(site.output, "/./scene%2Eglb") == fs::canonical(site.output / "scene.glb"));
     CHECK(fileBelow(site.output, "//scene.glb"));
@@ -103,7 +104,7 @@ TEST_CASE("The viewer finds the scenes of one bake or of a job's output", "[view
 }
 
 TEST_CASE("voxlight view's server answers on 127.0.0.1 only and serves nothing outside its folders", "[view]") {
-    const Site site;
+    const Site site("server");
     ViewServerOptions options;
     options.outputFolder = site.output;
     options.pageFolder = test::sourceDir() + "/tools/viewer";
@@ -170,7 +171,7 @@ TEST_CASE("voxlight view's server answers on 127.0.0.1 only and serves nothing o
 }
 
 TEST_CASE("voxlight view says what is wrong with its folder or port", "[view]") {
-    const Site site;
+    const Site site("errors");
     ViewServerOptions options;
     options.pageFolder = test::sourceDir() + "/tools/viewer";
     options.outputFolder = site.root / "nowhere";
