@@ -84,6 +84,20 @@ struct SideWeights {
     std::vector<uint32_t> selfGathered;  // side slots with no point
 };
 
+// The value at voxel side `slot` from per-point values: its gather points' weighted sum, or,
+// for a side no point applies to, its own point's (self[k] for the k-th self-gathered side).
+template <typename Value, typename AtPoint, typename AtSelf>
+Value sideValue(const SideWeights& weights, size_t slot, AtPoint&& atPoint, AtSelf&& atSelf) {
+    if (weights.begin[slot] == weights.begin[slot + 1]) {
+        const auto found =
+            std::lower_bound(weights.selfGathered.begin(), weights.selfGathered.end(), static_cast<uint32_t>(slot));
+        return atSelf(size_t(found - weights.selfGathered.begin()));
+    }
+    Value sum(0.0f);
+    for (uint32_t k = weights.begin[slot]; k < weights.begin[slot + 1]; ++k) sum += weights.weight[k] * atPoint(weights.point[k]);
+    return sum;
+}
+
 SideWeights sideWeights(const VoxelScene& voxels, const IrradianceCacheView& cache) {
     // Fixed chunks of voxels, each filling its own arrays, joined in chunk order: the same
     // result at any thread count, and no allocation per voxel.
@@ -212,16 +226,9 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
             for (size_t f = 0; f < 6; ++f) {
                 const int s = sides.sideOfFace[f];
                 if (s < 0) continue;
-                const size_t slot = i * 6 + size_t(s);
-                float openness = 0.0f;
-                if (weights.begin[slot] == weights.begin[slot + 1]) {
-                    const auto found = std::lower_bound(weights.selfGathered.begin(), weights.selfGathered.end(),
-                                                        static_cast<uint32_t>(slot));
-                    openness = open[cachePoints + size_t(found - weights.selfGathered.begin())];
-                } else {
-                    for (uint32_t k = weights.begin[slot]; k < weights.begin[slot + 1]; ++k)
-                        openness += weights.weight[k] * open[weights.point[k]];
-                }
+                const float openness = sideValue<float>(
+                    weights, i * 6 + size_t(s), [&](uint32_t q) { return open[q]; },
+                    [&](size_t k) { return open[cachePoints + k]; });
                 lit[i][f] += reflectance * sky->radiance * openness;
             }
         });
@@ -252,18 +259,10 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
             for (size_t i = range.begin(); i != range.end(); ++i) {
                 const VoxelSides sides = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
                 vec3 e[6];
-                for (int s = 0; s < sides.count; ++s) {
-                    const size_t slot = i * 6 + size_t(s);
-                    e[s] = vec3(0.0f);
-                    if (weights.begin[slot] == weights.begin[slot + 1]) {
-                        const auto found = std::lower_bound(weights.selfGathered.begin(), weights.selfGathered.end(),
-                                                            static_cast<uint32_t>(slot));
-                        e[s] = selfIrradiance[size_t(found - weights.selfGathered.begin())];
-                        continue;
-                    }
-                    for (uint32_t k = weights.begin[slot]; k < weights.begin[slot + 1]; ++k)
-                        e[s] += weights.weight[k] * points.irradiance[weights.point[k]];
-                }
+                for (int s = 0; s < sides.count; ++s)
+                    e[s] = sideValue<vec3>(
+                        weights, i * 6 + size_t(s), [&](uint32_t q) { return points.irradiance[q]; },
+                        [&](size_t k) { return selfIrradiance[k]; });
                 const vec3 reflectance = voxels.albedo[i] * kInvPi;
                 for (size_t f = 0; f < 6; ++f)
                     next[i][f] = lit[i][f] + (sides.sideOfFace[f] >= 0 ? reflectance * e[sides.sideOfFace[f]] : vec3(0.0f));
