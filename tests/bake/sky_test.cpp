@@ -21,6 +21,7 @@
 #include "trace/trace_scene.h"
 
 #include <catch2/catch.hpp>
+#include <tbb/global_control.h>
 
 #include <filesystem>
 #include <fstream>
@@ -255,4 +256,37 @@ TEST_CASE("A job file's sun takes an angle in degrees, for directional lights on
         {"type": "directional", "direction": [0, -1, 0], "angle": 120}]}]})";
     CHECK_THROWS_WITH(readJobFile((dir / "wide.json").string(), BakeSettings{}, "output"),
                       Catch::Contains("wide.json") && Catch::Contains("0..90"));
+}
+
+TEST_CASE("A bake under a sky and a sun with a disk is the same at 1 and 2 threads", "[bake]") {
+    // An open box lit by both: the sky's rays at the receivers, the gather points' openness,
+    // the sun's per-voxel directions and its penumbra strata are all seeded per element.
+    Scene scene;
+    const int white = addLambert(scene, vec3(0.7f));
+    addQuad(scene, "floor", white, vec3(0, 0, 0), vec3(0, 0, 1), vec3(1, 0, 1), vec3(1, 0, 0));
+    addQuad(scene, "wall", white, vec3(0, 0, 0), vec3(1, 0, 0), vec3(1, 1, 0), vec3(0, 1, 0));
+    addQuad(scene, "side", white, vec3(0, 0, 0), vec3(0, 1, 0), vec3(0, 1, 1), vec3(0, 0, 1));
+    Light sun;
+    sun.type = LightType::Directional;
+    sun.direction = glm::normalize(vec3(-0.3f, -1.0f, -0.4f));
+    sun.intensity = 5.0f;
+    sun.angularDiameter = 0.1f;
+    scene.lights.push_back(sun);
+    BakeSettings settings = quietSettings();
+    settings.voxel.resolution = 32;
+    settings.lightmap.width = settings.lightmap.height = 32;
+    settings.sky = kSky;
+    auto run = [&](int threads) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+        Diagnostics diagnostics(false, false);
+        return bake(scene, settings, diagnostics);
+    };
+    const BakeResult one = run(1), two = run(2);
+    REQUIRE(one.lightmaps.size() == 1);
+    REQUIRE(two.lightmaps.size() == 1);
+    CHECK(one.lightmaps[0].total.pixels == two.lightmaps[0].total.pixels);
+    CHECK(one.voxels.radiance == two.voxels.radiance);
+    double indirect = 0.0;
+    for (float v : one.lightmaps[0].indirect.pixels) indirect += v;
+    CHECK(indirect > 0.0);  // the sky and sun did bounce
 }
