@@ -44,16 +44,19 @@ case "${1:-}" in
       -artifact_prefix="build-asan/findings/$target/" "$@" "build-asan/corpus/$target" "tools/fuzz/corpus/$target" ;;
   minimise)
     target=$2
-    mkdir -p "build-asan/merged/$target"
+    mkdir -p "build-asan/merged/$target" "build-asan/findings/$target"
     rm -rf "build-asan/merged/$target"/*
-    "build-asan/fuzz/$target" "${limits[@]}" -max_len=6000 -merge=1 "build-asan/merged/$target" \
-      "tools/fuzz/corpus/$target" "build-asan/corpus/$target"
+    "build-asan/fuzz/$target" "${limits[@]}" -max_len=6000 -merge=1 -artifact_prefix="build-asan/findings/$target/" \
+      "build-asan/merged/$target" "tools/fuzz/corpus/$target" "build-asan/corpus/$target"
     rm -rf "tools/fuzz/corpus/$target"
     cp -r "build-asan/merged/$target" "tools/fuzz/corpus/$target" ;;
   replay)
     for target in "${targets[@]}"; do
       echo "replaying tools/fuzz/corpus/$target ($(ls "tools/fuzz/corpus/$target" | wc -l) inputs)"
-      "build-asan/fuzz/$target" "${limits[@]}" -runs=0 "tools/fuzz/corpus/$target"
+      # An input that fails is written under build-asan/findings/, not into the working tree.
+      mkdir -p "build-asan/findings/$target"
+      "build-asan/fuzz/$target" "${limits[@]}" -runs=0 -artifact_prefix="build-asan/findings/$target/" \
+        "tools/fuzz/corpus/$target"
     done ;;
   *)
     sed -n '2,16p' "$0"; exit 2 ;;

@@ -10,8 +10,8 @@
 #pragma once
 
 #include "core/polygon_irradiance.h"
-#include "core/rng.h"
 #include "core/sampling.h"
+#include "core/shared_edge.h"
 #include "trace/materials.h"
 #include "trace/path_kernels.h"
 #include "trace/surface_samples.h"
@@ -143,9 +143,7 @@ VL_HOSTDEV inline vec3 emitterQuadIrradiance(const TraceSceneView& s, const BvhV
     const vec3* va = s.vertices + 3 * static_cast<size_t>(halves[0]);
     const vec3* vb = s.vertices + 3 * static_cast<size_t>(halves[1]);
     // The corner of the first half that the second lacks, and the edges to the shared two.
-    int own = 0;
-    for (int i = 0; i < 3; ++i)
-        if (!(va[i] == vb[0] || va[i] == vb[1] || va[i] == vb[2])) own = i;
+    const int own = sharedEdge(va, vb).ownA;
     const vec3 origin = va[own];
     const vec3 edge1 = va[(own + 1) % 3] - origin, edge2 = va[(own + 2) % 3] - origin;
     const vec3 cross = glm::cross(edge1, edge2);

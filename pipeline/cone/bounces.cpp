@@ -233,6 +233,8 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
             }
         });
         current = lit;
+        // Cones read the mips, built above from the light without the sky.
+        if (!transport) mips.relight(voxels, isotropic(voxels, current), current);
     }
     double added = 0.0, addedBefore = 0.0;  // light the last two bounces added
     std::vector<FaceRadiance> older;  // L two bounces before the last, for the tail's local ratios

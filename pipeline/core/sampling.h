@@ -39,6 +39,14 @@ VL_HOSTDEV inline vec3 coneDirection(vec2 disk, float cosMax) {
     return r > 0.0f ? vec3(disk.x / r * s, disk.y / r * s, z) : vec3(0.0f, 0.0f, 1.0f);
 }
 
+// The same about a unit `axis`: a sun's direction for a point of its disk.
+VL_HOSTDEV inline vec3 coneDirectionAbout(const vec3& axis, float cosMax, vec2 disk) {
+    vec3 t, b;
+    orthonormalBasis(axis, t, b);
+    const vec3 local = coneDirection(disk, cosMax);
+    return glm::normalize(local.x * t + local.y * b + local.z * axis);
+}
+
 VL_HOSTDEV inline vec3 sampleUniformSphere(vec2 u) {
     const float z = 1.0f - 2.0f * u.x;
     const float r = glm::sqrt(glm::max(0.0f, 1.0f - z * z));

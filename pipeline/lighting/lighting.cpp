@@ -2,8 +2,8 @@
 
 #include "core/error.h"
 #include "core/progress.h"
-#include "core/rng.h"
 #include "core/sampling.h"
+#include "core/shared_edge.h"
 #include "lighting/lighting_kernels.h"
 #include "scene/surface.h"
 #include "voxel/index_grid.h"
@@ -27,8 +27,6 @@ using lighting::EmitterSample;
 using lighting::EmitterTriangle;
 using lighting::KernelLight;
 
-// Salt of the textured emitters' sample jitter (Pcg32::forItem), distinct from other passes.
-constexpr uint64_t kEmitterJitterSalt = 0x4C49474854ull;  // "LIGHT"
 constexpr int kMaxEmitterStrata = 64;
 
 std::string lightLabel(const Scene& scene, size_t index) {
@@ -160,19 +158,14 @@ struct Emitters {
     std::vector<EmitterSample> samples;
 };
 
-// Whether triangles a and b of one uniform emitter are the two halves of a quad: two shared
-// corners and the fourth corner in a's plane (within a thousandth of a voxel; index space).
+// Whether triangles a and b of one uniform emitter are the two halves of a quad: an edge in
+// common and b's other corner in a's plane (within a thousandth of a voxel; index space).
 bool halvesOfAQuad(const EmitterTriangle& a, const EmitterTriangle& b) {
     const vec3 va[3] = {a.v0, a.v1, a.v2};
     const vec3 vb[3] = {b.v0, b.v1, b.v2};
-    int shared = 0;
-    vec3 unshared(0.0f);
-    for (const vec3& q : vb) {
-        const bool inA = q == va[0] || q == va[1] || q == va[2];
-        shared += inA ? 1 : 0;
-        if (!inA) unshared = q;
-    }
-    return shared == 2 && glm::dot(a.normal, b.normal) > 0.9999f && std::abs(glm::dot(a.normal, unshared - a.v0)) < 1e-3f;
+    const SharedEdge e = sharedEdge(va, vb);
+    return e.shared == 2 && glm::dot(a.normal, b.normal) > 0.9999f &&
+           std::abs(glm::dot(a.normal, vb[e.ownB] - a.v0)) < 1e-3f;
 }
 
 // The patches of every emissive mesh (lighting_kernels.h EmitterTriangle). A textured
@@ -224,10 +217,8 @@ Emitters emitterSamples(const Scene& scene, int strata, float h) {
             const float sampleArea = tri.area * share;
             for (int sy = 0; sy < strata; ++sy) {
                 for (int sx = 0; sx < strata; ++sx) {
-                    Pcg32 rng = Pcg32::forItem(triangleId, static_cast<uint64_t>(sy * strata + sx), kEmitterJitterSalt);
-                    const float ux = (static_cast<float>(sx) + rng.next1D()) / static_cast<float>(strata);
-                    const float uy = (static_cast<float>(sy) + rng.next1D()) / static_cast<float>(strata);
-                    const vec2 b = sampleUniformTriangle(vec2(ux, uy));
+                    const vec2 b =
+                        sampleUniformTriangle(jitteredStratum(triangleId, 0, strata, sx, sy, lighting::kEmitterJitterSalt));
                     const vec3 Le = emissionAt(scene, mesh, t, b);
                     if (!finite(Le))
                         throw InputError(scene.sourcePath + ": mesh '" + mesh.name + "' triangle " + std::to_string(t) +

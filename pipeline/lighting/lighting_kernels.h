@@ -44,7 +44,6 @@
 #include "core/hostdev.h"
 #include "core/math.h"
 #include "core/polygon_irradiance.h"
-#include "core/rng.h"
 #include "core/sampling.h"
 #include "voxel/voxel_scene.h"
 
@@ -443,16 +442,15 @@ VL_HOSTDEV inline float visibilityLoss(const LightingView& view, IndexAccessor& 
                                            steps);
 }
 
-// Stratum k of a uniform patch's n × n for the voxel centred at `voxel` (index space):
-// jittered by a generator of the voxel's own, its x choosing the patch's triangle by area,
-// mapped area-preservingly onto it. The power is Le × the stratum's share of the patch's
-// area (W/sr). The generator is seeded by where the voxel lies in the patch's own frame
-// (its first triangle's first edge, the normal), rounded to half voxels, not by the voxel's
-// index or grid coordinate: a scene turned a quarter turn, moved or scaled then lights each
-// voxel through the same points (seeded by the index, a quarter turn moved the Cycles quad
-// box's indirect light by 1%). Two voxel centres differ by at least 1/√3 > ½ along some axis
-// of any frame, so no two voxels share a seed.
-constexpr uint64_t kPatchJitterSalt = 0x4C49474854ull;  // "LIGHT"
+// A uniform patch's points for one voxel are jittered by a generator of the voxel's own,
+// seeded (voxelInPatchFrame) by where the voxel lies in the patch's own frame (its first
+// triangle's first edge, the normal), rounded to half voxels, not by the voxel's index or grid
+// coordinate: a scene turned a quarter turn, moved or scaled then lights each voxel through
+// the same points (seeded by the index, a quarter turn moved the Cycles quad box's indirect
+// light by 1%). Two voxel centres differ by at least 1/√3 > ½ along some axis of any frame,
+// so no two voxels share a seed. The salt is the textured emitters' fixed samples' too
+// (lighting.cpp).
+constexpr uint64_t kEmitterJitterSalt = 0x4C49474854ull;  // "LIGHT"
 
 VL_HOSTDEV inline uint64_t voxelInPatchFrame(const EmitterTriangle& first, const vec3& voxel) {
     const vec3 u = glm::normalize(first.v1 - first.v0);
@@ -464,22 +462,21 @@ VL_HOSTDEV inline uint64_t voxelInPatchFrame(const EmitterTriangle& first, const
     return whole(glm::dot(d, u)) | whole(glm::dot(d, v)) << 21 | whole(glm::dot(d, first.normal)) << 42;
 }
 
-VL_HOSTDEV inline EmitterSample uniformPatchSample(const EmitterTriangle* patch, int strata, uint32_t k, const vec3& voxel,
+// Stratum k of a uniform patch's n × n for the voxel whose seed is `seed`: its x chooses the
+// patch's triangle by area, mapped area-preservingly onto it. The power is Le × the
+// stratum's share of the patch's area (W/sr).
+VL_HOSTDEV inline EmitterSample uniformPatchSample(const EmitterTriangle* patch, int strata, uint32_t k, uint64_t seed,
                                                    uint32_t patchIndex) {
-    Pcg32 rng = Pcg32::forItem(voxelInPatchFrame(patch[0], voxel), uint64_t(patchIndex) * uint64_t(strata * strata) + k,
-                               kPatchJitterSalt);
-    float ux, uy;
-    rng.next2D(ux, uy);
-    ux = (static_cast<float>(k % uint32_t(strata)) + ux) / static_cast<float>(strata);
-    uy = (static_cast<float>(k / uint32_t(strata)) + uy) / static_cast<float>(strata);
+    vec2 u = jitteredStratum(seed, patchIndex, strata, int(k % uint32_t(strata)), int(k / uint32_t(strata)),
+                             kEmitterJitterSalt);
     const float area = patch[0].patchSize == 2 ? patch[0].area + patch[1].area : patch[0].area;
     int t = 0;
     if (patch[0].patchSize == 2) {
         const float firstShare = patch[0].area / area;
-        t = ux < firstShare ? 0 : 1;
-        ux = glm::clamp(t == 0 ? ux / firstShare : (ux - firstShare) / (1.0f - firstShare), 0.0f, 1.0f);
+        t = u.x < firstShare ? 0 : 1;
+        u.x = glm::clamp(t == 0 ? u.x / firstShare : (u.x - firstShare) / (1.0f - firstShare), 0.0f, 1.0f);
     }
-    const vec2 b = sampleUniformTriangle(vec2(ux, uy));
+    const vec2 b = sampleUniformTriangle(u);
     EmitterSample sample;
     sample.position = (1.0f - b.x - b.y) * patch[t].v0 + b.x * patch[t].v1 + b.y * patch[t].v2;
     sample.power = patch[0].radiance * (area / static_cast<float>(strata * strata));
@@ -527,13 +524,8 @@ VL_HOSTDEV inline VoxelLighting shadeVoxel(const LightingView& view, IndexAccess
                 // own generator; the bounces' gathers average the penumbrae that makes.
                 const ivec3 c = view.coords[i];
                 const uint64_t key = (uint64_t(uint32_t(c.x)) << 42) ^ (uint64_t(uint32_t(c.y)) << 21) ^ uint64_t(uint32_t(c.z));
-                Pcg32 rng = Pcg32::forItem(key, l, 0x53554Eu);  // "SUN"
-                vec2 u;
-                rng.next2D(u.x, u.y);
-                vec3 t, b;
-                orthonormalBasis(L, t, b);
-                const vec3 local = coneDirection(sampleConcentricDisk(u), light.cosHalfAngle);
-                L = glm::normalize(local.x * t + local.y * b + local.z * L);
+                const vec2 u = jitteredStratum(key, l, 1, 0, 0, 0x53554Eu);  // "SUN"
+                L = coneDirectionAbout(L, light.cosHalfAngle, sampleConcentricDisk(u));
             }
         } else {
             const vec3 toLight = light.position - surface;
@@ -586,8 +578,9 @@ VL_HOSTDEV inline VoxelLighting shadeVoxel(const LightingView& view, IndexAccess
         float unshadowed[6] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
         vec3 visible[6] = {vec3(0.0f), vec3(0.0f), vec3(0.0f), vec3(0.0f), vec3(0.0f), vec3(0.0f)};
         const uint32_t sampleCount = tri.uniform ? uint32_t(view.emitterStrata * view.emitterStrata) : tri.sampleCount;
+        const uint64_t patchSeed = tri.uniform ? voxelInPatchFrame(tri, receiver) : 0;
         for (uint32_t k = 0; k < sampleCount; ++k) {
-            const EmitterSample sample = tri.uniform ? uniformPatchSample(patch, view.emitterStrata, k, receiver, e)
+            const EmitterSample sample = tri.uniform ? uniformPatchSample(patch, view.emitterStrata, k, patchSeed, e)
                                                      : view.emitterSamples[tri.firstSample + k];
             const vec3 toSample = sample.position - surface;
             const float d = glm::length(toSample);

@@ -117,19 +117,19 @@ struct Camera {
     float focusDistance = 1.0f;       // metres along forward
 };
 
-// Positions, directions and lengths are in metres in the scene's local frame: world =
-// origin + local, origin the centre of the geometry's bounding box, found in double precision
-// before anything is rounded to float. Why: float holds a position 10 km from the world origin
-// to 1 mm, and voxels anchored at the world origin fell at other offsets inside their walls
-// when the scene moved; in the local frame a translated scene is the same floats.
 // Light from beyond the scene in every direction not blocked by it: a uniform sky of
 // radiance W/(m²·sr) (Cycles' world colour). glTF has none; a job file's or the command
 // line's `sky` setting gives it (bake_settings.h).
 struct Sky {
     vec3 radiance{0.0f};
-    bool present() const { return radiance.x > 0.0f || radiance.y > 0.0f || radiance.z > 0.0f; }
+    bool present() const { return maxComponent(radiance) > 0.0f; }
 };
 
+// Positions, directions and lengths are in metres in the scene's local frame: world =
+// origin + local, origin the centre of the geometry's bounding box, found in double precision
+// before anything is rounded to float. Why: float holds a position 10 km from the world origin
+// to 1 mm, and voxels anchored at the world origin fell at other offsets inside their walls
+// when the scene moved; in the local frame a translated scene is the same floats.
 struct Scene {
     std::string sourcePath;  // the file it came from, for messages
     std::string name;        // file stem, used for output folders

@@ -69,12 +69,7 @@ VL_HOSTDEV inline vec3 punctualLightIrradiance(const BvhView& bvh, const TraceLi
     bool toInfinity = false;
     if (light.type == TraceLightType::Directional) {
         wi = -light.direction;
-        if (light.cosHalfAngle < 1.0f) {
-            vec3 t, b;
-            orthonormalBasis(wi, t, b);
-            const vec3 local = coneDirection(disk, light.cosHalfAngle);
-            wi = glm::normalize(local.x * t + local.y * b + local.z * wi);
-        }
+        if (light.cosHalfAngle < 1.0f) wi = coneDirectionAbout(wi, light.cosHalfAngle, disk);
         e = light.intensity;
         toInfinity = true;
     } else {

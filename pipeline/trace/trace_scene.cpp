@@ -1,6 +1,7 @@
 #include "trace/trace_scene.h"
 
 #include "core/error.h"
+#include "core/shared_edge.h"
 #include "scene/scene.h"
 #include "trace/bvh.h"
 
@@ -188,18 +189,13 @@ TraceScene TraceScene::build(const Scene& scene, const SceneTriangles& triangles
         if (out.materialIds[b] != out.materialIds[a] || m.emissiveTexture.texture >= 0) continue;
         const vec3* va = &out.vertices[3 * size_t(a)];
         const vec3* vb = &out.vertices[3 * size_t(b)];
-        int shared = 0;
-        vec3 ownA(0.0f), ownB(0.0f), sharedSum(0.0f);
-        for (int i = 0; i < 3; ++i) {
-            const bool inB = va[i] == vb[0] || va[i] == vb[1] || va[i] == vb[2];
-            shared += inB ? 1 : 0;
-            if (inB) sharedSum += va[i]; else ownA = va[i];
-            if (!(vb[i] == va[0] || vb[i] == va[1] || vb[i] == va[2])) ownB = vb[i];
-        }
+        const SharedEdge e = sharedEdge(va, vb);
+        if (e.shared != 2) continue;
+        const vec3 sharedSum = va[(e.ownA + 1) % 3] + va[(e.ownA + 2) % 3];
         const float size = glm::length(va[1] - va[0]) + glm::length(va[2] - va[0]);
         const vec3 na = glm::normalize(glm::cross(va[1] - va[0], va[2] - va[0]));
         const vec3 nb = glm::normalize(glm::cross(vb[1] - vb[0], vb[2] - vb[0]));
-        if (shared == 2 && glm::dot(na, nb) > 0.9999f && glm::length(ownA + ownB - sharedSum) < 1e-5f * size) {
+        if (glm::dot(na, nb) > 0.9999f && glm::length(va[e.ownA] + vb[e.ownB] - sharedSum) < 1e-5f * size) {
             out.emitterQuad[k] = kQuadFirstHalf;
             out.emitterQuad[k + 1] = kQuadSecondHalf;
         }
