@@ -189,7 +189,7 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
         grown.lightmap = lightmap;
         checkMemoryBudget(scene, grown, voxelSize);
     }
-    if (maxComponent(settings.sky) > 0.0f) scene.sky.radiance = settings.sky;
+    applySkySettings(settings, scene);
     if (scene.lights.empty() && !scene.hasEmitters() && !scene.sky.present())
         diagnostics.warn(scene.sourcePath + ": the scene has no lights, no emissive materials and no sky: the bake is black");
 
@@ -246,6 +246,11 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
     sky.openness = [&](const std::vector<GatherPoint>& points) {
         return skyOpenness(points, static_cast<float>(result.voxels.voxelSize), bvhView, sceneView, settings.bounceRays);
     };
+    if (sceneView.sky.hasImage())
+        sky.irradiance = [&](const std::vector<GatherPoint>& points) {
+            return skyIrradianceAtPoints(points, static_cast<float>(result.voxels.voxelSize), bvhView, sceneView,
+                                         settings.direct.skyStrata);
+        };
 
     timed(result.stages, "bounces", [&] {
         Progress progress("bounces", uint64_t(settings.bounces) * result.voxels.size(), settings.quiet);

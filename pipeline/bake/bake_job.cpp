@@ -189,6 +189,7 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
     const std::string sourcePath = scene.sourcePath;
     std::vector<Mesh::Source> meshSources;
     for (const Mesh& mesh : scene.meshes) meshSources.push_back(mesh.source);
+    const vec3 viewerSky = scene.sky.meanRadiance();  // glTF holds no sky: viewers get its mean
     report.stages.push_back({"load", std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count()});
     report.triangles = scene.triangleCount();
     report.warnings = scene.warnings;
@@ -237,7 +238,7 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
             for (const BakedLightmap& lightmap : result.lightmaps)
                 lightmaps.push_back({lightmap.name, lightmap.meshes, encodeRgbm(lightmap.total)});
             writeLightmappedGlb(sourcePath, meshSources, result.generatedLayouts, lightmaps, job.addedCameras, p,
-                                diagnostics, settings.sky);
+                                diagnostics, viewerSky);
         });
     files.writeAll();
     report.stages.push_back({"write", std::chrono::duration<double>(std::chrono::steady_clock::now() - writeStart).count()});
@@ -287,7 +288,7 @@ void addJobLightsAndCameras(const BakeJob& job, Scene& scene) {
         camera.position = toLocal(camera.position);
         scene.cameras.push_back(camera);
     }
-    if (maxComponent(job.settings.sky) > 0.0f) scene.sky.radiance = job.settings.sky;
+    applySkySettings(job.settings, scene);
 }
 
 Scene loadJobScene(const BakeJob& job) {

@@ -2,6 +2,7 @@
 
 #include "cone/irradiance_cache.h"
 #include "core/error.h"
+#include "scene/scene.h"
 
 #include <cmath>
 #include <sstream>
@@ -114,7 +115,13 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
                  throw SettingsError("setting sky: '" + v + "' must be finite, non-negative and at most 1e9");
              s.sky = radiance;
          }},
-        {"sky-strata", "n × n directions per receiver sample that look for the sky (default 10)",
+        {"sky-image", "an equirectangular HDR image (.hdr, .exr) of the sky, mapped as Blender maps it, added to `sky` (default: none)",
+         [](S& s, const std::string& v) { s.skyImage = v; }},
+        {"sky-rotation", "degrees the sky image turns about +Y, counterclockwise seen from above (default 0)",
+         [](S& s, const std::string& v) { s.skyRotation = static_cast<float>(parseRealSetting("sky-rotation", v, -360.0, 360.0)); }},
+        {"sky-intensity", "scale of the sky image's radiance (default 1)",
+         [](S& s, const std::string& v) { s.skyIntensity = static_cast<float>(parseRealSetting("sky-intensity", v, 0.0, 1e6)); }},
+        {"sky-strata", "n × n directions per receiver sample that look for the sky, and as many drawn from its image (default 10)",
          [](S& s, const std::string& v) { s.direct.skyStrata = parseIntSetting("sky-strata", v, 1, 64); }},
         {"width", "image width in pixels (default 256)",
          [](S& s, const std::string& v) { s.imageWidth = parseIntSetting("width", v, 1, 16384); }},
@@ -196,7 +203,10 @@ std::string describeBakeSettings(const BakeSettings& s) {
         << ", bounce-rays=" << s.bounceRays << ", bounce-gather-level=" << s.bounceGatherLevel << ", lightmap-res=" << s.lightmap.width
         << ", lightmap-subsamples=" << s.lightmap.subsamplesPerAxis << ", emitter-strata=" << s.direct.emitterStrata
         << ", width=" << s.imageWidth << ", height=" << s.imageHeight;
-    if (maxComponent(s.sky) > 0.0f) out << ", sky=" << s.sky.x << "," << s.sky.y << "," << s.sky.z << ", sky-strata=" << s.direct.skyStrata;
+    if (maxComponent(s.sky) > 0.0f) out << ", sky=" << s.sky.x << "," << s.sky.y << "," << s.sky.z;
+    if (!s.skyImage.empty())
+        out << ", sky-image=" << s.skyImage << ", sky-rotation=" << s.skyRotation << ", sky-intensity=" << s.skyIntensity;
+    if (maxComponent(s.sky) > 0.0f || !s.skyImage.empty()) out << ", sky-strata=" << s.direct.skyStrata;
     if (s.lighting.attenuation)
         out << ", attenuation=" << s.lighting.attenuation->constant << "," << s.lighting.attenuation->linear << ","
             << s.lighting.attenuation->quadratic;
@@ -210,6 +220,14 @@ std::string describeBakeSettings(const BakeSettings& s) {
         if (group.width > 0) out << "@" << group.width << "x" << group.height;
     }
     return out.str();
+}
+
+void applySkySettings(const BakeSettings& settings, Scene& scene) {
+    if (maxComponent(settings.sky) > 0.0f) scene.sky.radiance = settings.sky;
+    if (settings.skyImage.empty()) return;
+    if (!scene.sky.image || scene.sky.image->path != settings.skyImage) scene.sky.image = loadSkyImage(settings.skyImage);
+    scene.sky.rotationDegrees = settings.skyRotation;
+    scene.sky.intensity = settings.skyIntensity;
 }
 
 }  // namespace vl

@@ -16,6 +16,8 @@
 
 namespace vl {
 
+struct Scene;
+
 struct BakeOutputs {
     bool lightmaps = true;  // lightmap atlases (EXR total/direct/indirect, PNG preview)
     bool images = true;     // camera images (EXR + PNG + AOVs)
@@ -89,6 +91,11 @@ struct BakeSettings {
     DirectLightSettings direct;
     // A uniform sky's radiance, W/(m²·sr) (scene.h Sky; glTF has none): zero, no sky.
     vec3 sky{0.0f};
+    // An equirectangular HDR sky image (trace/sky.h), added to `sky`: its file ("": none),
+    // its turn about +Y in degrees (counterclockwise seen from above) and its scale.
+    std::string skyImage;
+    float skyRotation = 0.0f;
+    float skyIntensity = 1.0f;
     int imageWidth = 256;
     int imageHeight = 256;
     int imageSubsamples = 2;  // n × n primary rays per pixel
@@ -113,5 +120,9 @@ void validateBakeSettings(const BakeSettings& settings);
 
 // "name=value, …" of every setting, for reports and file metadata.
 std::string describeBakeSettings(const BakeSettings& settings);
+
+// The settings' sky into the scene's (scene.h Sky), the image read from its file (InputError
+// naming it); a scene keeps its own sky where the settings give none.
+void applySkySettings(const BakeSettings& settings, Scene& scene);
 
 }  // namespace vl

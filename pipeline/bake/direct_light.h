@@ -193,25 +193,51 @@ VL_HOSTDEV inline vec3 emitterQuadIrradiance(const TraceSceneView& s, const BvhV
     return wholly * (sampledVisible / sampled);
 }
 
-// Irradiance from a uniform sky at a receiver: π·L_sky times the share of m × m stratified
-// cosine-weighted directions about ns (each jittered by its own generator, seed and stratum)
-// that leave the scene, above the geometric surface too. The sky is seen in every direction
-// nothing blocks, so unlike an emitter there is no closed form to scale: this is the plain
-// stratified estimate, exact where the whole hemisphere is open (a floor under the sky) or
-// closed.
+// Irradiance from the sky at a receiver. A uniform sky: π·L_sky times the share of m × m
+// stratified cosine-weighted directions about ns (each jittered by its own generator, seed
+// and stratum) that leave the scene, above the geometric surface too. The sky is seen in
+// every direction nothing blocks, so unlike an emitter there is no closed form to scale:
+// this is the plain stratified estimate, exact where the whole hemisphere is open (a floor
+// under the sky) or closed. An image sky adds m × m stratified draws from the image
+// (sky.h), and both sets count by the balance heuristic: each open direction adds
+// L(d)·cos θ / (m²·(p_cos(d) + p_image(d))). A small bright sun in the image is found by its
+// own draws, which cosine directions alone would miss or hit by chance.
 VL_HOSTDEV inline vec3 skyIrradiance(const TraceSceneView& s, const BvhView& bvh, const vec3& p, const vec3& ng,
                                      const vec3& ns, int strata, uint64_t seed) {
-    if (!(maxComponent(s.skyRadiance) > 0.0f)) return vec3(0.0f);
-    int open = 0;
+    if (!s.sky.present()) return vec3(0.0f);
+    const bool image = s.sky.samplable();
+    const auto open = [&](const vec3& d) {
+        if (!(glm::dot(d, ng) > 0.0f)) return false;
+        Ray ray;
+        ray.direction = d;
+        ray.origin = offsetRayOrigin(p, ng, bvh.extent);
+        return !intersectAny(bvh, ray);
+    };
+    if (!image && !s.sky.hasImage()) {
+        int seen = 0;
+        for (int i = 0; i < strata; ++i)
+            for (int j = 0; j < strata; ++j)
+                if (open(sampleDiffuseDirection(ns, jitteredStratum(seed, 0, strata, i, j, 0x534B59u))))  // "SKY"
+                    ++seen;
+        return s.sky.uniform * (kPi * static_cast<float>(seen) / static_cast<float>(strata * strata));
+    }
+    const float n = static_cast<float>(strata * strata);
+    const auto add = [&](const vec3& d, vec3& sum) {
+        const float cosS = glm::dot(ns, d);
+        if (!(cosS > 0.0f) || !open(d)) return;
+        const float pdfs = cosS * kInvPi + (image ? skyImagePdf(s.sky, d) : 0.0f);
+        if (pdfs > 0.0f) sum += skyRadianceAlong(s.sky, d) * (cosS / (n * pdfs));
+    };
+    vec3 sum(0.0f);
     for (int i = 0; i < strata; ++i)
         for (int j = 0; j < strata; ++j) {
-            Ray ray;
-            ray.direction = sampleDiffuseDirection(ns, jitteredStratum(seed, 0, strata, i, j, 0x534B59u));  // "SKY"
-            if (!(glm::dot(ray.direction, ng) > 0.0f)) continue;
-            ray.origin = offsetRayOrigin(p, ng, bvh.extent);
-            if (!intersectAny(bvh, ray)) ++open;
+            add(sampleDiffuseDirection(ns, jitteredStratum(seed, 0, strata, i, j, 0x534B59u)), sum);
+            if (!image) continue;
+            float pdf = 0.0f;
+            const vec3 d = sampleSkyImage(s.sky, jitteredStratum(seed, 1, strata, i, j, 0x534B59u), pdf);
+            if (pdf > 0.0f) add(d, sum);
         }
-    return s.skyRadiance * (kPi * static_cast<float>(open) / static_cast<float>(strata * strata));
+    return isFinite(sum) ? sum : vec3(0.0f);
 }
 
 // Irradiance from a directional light with a disk (a sun, TraceLight::cosHalfAngle < 1): the

@@ -170,20 +170,45 @@ json readJson(const std::string& path, const std::string& what) {
     }
 }
 
-// "sky": {"radiance": [r, g, b]} (or one number): the bake setting `sky`.
-void readSky(const json& object, BakeSettings& settings, const std::string& where) {
-    if (!object.is_object() || !object.contains("radiance"))
-        throw InputError(where + ": \"sky\" must be an object with a \"radiance\" (W/(m²·sr): [r, g, b] or one number)");
+// "sky": {"radiance": [r, g, b] (or one number), "image": path, "rotation": degrees,
+// "intensity": scale}: the bake settings sky, sky-image (relative to the job file's folder),
+// sky-rotation and sky-intensity. A radiance or an image is needed; rotation and intensity
+// belong to an image.
+void readSky(const json& object, BakeSettings& settings, const std::string& where, const fs::path& base) {
+    if (!object.is_object() || !(object.contains("radiance") || object.contains("image")))
+        throw InputError(where + ": \"sky\" must be an object with a \"radiance\" (W/(m²·sr): [r, g, b] or one number) "
+                                 "or an \"image\" (an equirectangular .hdr or .exr)");
     for (const auto& [key, value] : object.items())
-        if (key != "radiance") throw InputError(where + ".sky: unknown key \"" + key + "\" (known: radiance)");
-    const json& radiance = object["radiance"];
-    const vec3 r = radiance.is_number() ? vec3(radiance.get<float>()) : readVec3(radiance, where + ".sky.radiance");
-    std::ostringstream text;
-    text << r.x << "," << r.y << "," << r.z;
-    try {
-        applySetting(bakeSettingsTable(), settings, "sky", text.str());
-    } catch (const SettingsError& e) {
-        throw SettingsError(where + ".sky.radiance: " + e.what());
+        if (key != "radiance" && key != "image" && key != "rotation" && key != "intensity")
+            throw InputError(where + ".sky: unknown key \"" + key + "\" (known: radiance, image, rotation, intensity)");
+    if (!object.contains("image") && (object.contains("rotation") || object.contains("intensity")))
+        throw InputError(where + ".sky: \"rotation\" and \"intensity\" belong to an \"image\"");
+    const auto apply = [&](const char* key, const char* setting, const std::string& text) {
+        try {
+            applySetting(bakeSettingsTable(), settings, setting, text);
+        } catch (const SettingsError& e) {
+            throw SettingsError(where + ".sky." + key + ": " + e.what());
+        }
+    };
+    if (object.contains("radiance")) {
+        const json& radiance = object["radiance"];
+        const vec3 r = radiance.is_number() ? vec3(radiance.get<float>()) : readVec3(radiance, where + ".sky.radiance");
+        std::ostringstream text;
+        text << r.x << "," << r.y << "," << r.z;
+        apply("radiance", "sky", text.str());
+    }
+    if (!object.contains("image")) return;
+    if (!object["image"].is_string() || object["image"].get<std::string>().empty())
+        throw InputError(where + ".sky.image must be the path of an image file");
+    const fs::path image = object["image"].get<std::string>();
+    apply("image", "sky-image", image.is_absolute() ? image.string() : (base / image).lexically_normal().string());
+    for (const char* key : {"rotation", "intensity"}) {
+        if (!object.contains(key)) continue;
+        if (!object[key].is_number()) throw InputError(where + ".sky." + key + " must be a number");
+        std::ostringstream text;
+        text.precision(9);
+        text << object[key].get<double>();
+        apply(key, key == std::string("rotation") ? "sky-rotation" : "sky-intensity", text.str());
     }
 }
 
@@ -206,7 +231,7 @@ std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& de
         BakeSettings global = defaults;
         if (root.contains("settings")) applySettings(global, root["settings"], path);
         if (root.contains("atlases")) global.lightmap.atlases = readAtlasGroups(root["atlases"], path + ": atlases");
-        if (root.contains("sky")) readSky(root["sky"], global, path);
+        if (root.contains("sky")) readSky(root["sky"], global, path, base);
         const std::string outputRoot = root.contains("output") ? resolve(root["output"].get<std::string>()) : defaultOutputRoot;
 
         std::vector<BakeJob> jobs;
@@ -219,7 +244,7 @@ std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& de
             job.scenePath = resolve(entry["path"].get<std::string>());
             job.settings = global;
             if (entry.contains("settings")) applySettings(job.settings, entry["settings"], where);
-            if (entry.contains("sky")) readSky(entry["sky"], job.settings, where);
+            if (entry.contains("sky")) readSky(entry["sky"], job.settings, where, base);
             // Mesh names belong to one scene: a scene's list replaces the global one ([] for none).
             if (entry.contains("atlases"))
                 job.settings.lightmap.atlases = readAtlasGroups(entry["atlases"], where + ".atlases");

@@ -1,5 +1,7 @@
 #include "bake/ray_gather.h"
 
+#include "bake/direct_light.h"
+
 #include "cone/cone_trace.h"
 #include "core/error.h"
 #include "core/progress.h"
@@ -326,6 +328,16 @@ std::vector<float> skyOpenness(const std::vector<GatherPoint>& points, float vox
         open[q] = rayWeight * static_cast<float>(pattern.size() - hits);
     });
     return open;
+}
+
+std::vector<vec3> skyIrradianceAtPoints(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
+                                        const TraceSceneView& scene, int strata) {
+    std::vector<vec3> irradiance(points.size());
+    tbb::parallel_for(size_t(0), points.size(), [&](size_t q) {
+        const RayFan fan = rayFan(points[q], voxelSize, bvh, scene);
+        irradiance[q] = skyIrradiance(scene, bvh, fan.origin, fan.normal, fan.normal, strata, uint64_t(q));
+    });
+    return irradiance;
 }
 
 BackProbe probeSingleSidedBacks(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,

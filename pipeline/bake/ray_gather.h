@@ -88,6 +88,13 @@ FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView
 std::vector<float> skyOpenness(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
                                const TraceSceneView& scene, int raysPerAxis);
 
+// Per point, the sky's irradiance where its rays start (rayFan), by the receivers' estimate
+// (bake/direct_light.h skyIrradiance, `strata`² directions of each kind, seeded by the
+// point's index): for the bounces under a sky with an image, whose light is not one
+// radiance times an openness.
+std::vector<vec3> skyIrradianceAtPoints(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
+                                        const TraceSceneView& scene, int strata);
+
 struct BackProbe {
     uint64_t hits = 0;              // rays that hit a triangle
     uint64_t singleSidedBacks = 0;  // of them, on the back of a single-sided material

@@ -527,7 +527,7 @@ CameraReceivers buildCameraReceivers(const TraceScene& scene, const Bvh& bvh, co
                         const Ray ray = pinholeRay(camera, film);
                         Hit hit;
                         if (!intersectClosest(bv, ray, hit)) {  // the sky, seen directly
-                            emission += sv.skyRadiance * weight;
+                            emission += skyRadianceAlong(sv.sky, ray.direction) * weight;
                             continue;
                         }
                         const SurfaceHit h = surfaceAt(sv, hit.triangle, hit.b1, hit.b2);

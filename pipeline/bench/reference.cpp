@@ -61,6 +61,12 @@ std::string referenceKey(const BakeJob& job, const BenchReferenceSettings& setti
         << "; noise " << settings.targetNoise << " pilot " << settings.pilotSpp << " max " << settings.maxSpp << " budget "
         << settings.budgetSeconds << " seed " << settings.seed << "; bounces " << PathSettings{}.maxBounces << "; sky "
         << b.sky.x << "," << b.sky.y << "," << b.sky.z;
+    if (!b.skyImage.empty()) {
+        uint64_t image = kFnvOffset;
+        const std::string bytes = readFile(b.skyImage);
+        hashBytes(image, bytes.data(), bytes.size());
+        key << " image " << hex(image) << " rotation " << b.skyRotation << " intensity " << b.skyIntensity;
+    }
     for (const Light& l : job.addedLights)
         key << "; light " << l.name << " " << static_cast<int>(l.type) << " " << l.color.x << "," << l.color.y << ","
             << l.color.z << " " << l.intensity << " " << l.range << " " << l.innerConeAngle << " " << l.outerConeAngle

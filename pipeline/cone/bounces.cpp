@@ -200,7 +200,7 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
     const SideWeights weights = sideWeights(voxels, cache.view(mips.view()));
     std::vector<vec3> selfIrradiance(weights.selfGathered.size());
     // By transport, the cache's points and then the self-gathered sides' are one map.
-    const bool skyLit = sky && maxComponent(sky->radiance) > 0.0f;
+    const bool skyLit = sky && (maxComponent(sky->radiance) > 0.0f || sky->irradiance);
     const FaceTransport* transport = nullptr;
     std::vector<GatherPoint> points;
     if (transportBuilder || skyLit) {
@@ -214,11 +214,18 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
                         std::to_string(transport->pointCount()) + " points, not " + std::to_string(points.size()));
     }
     if (skyLit) {
-        const std::vector<float> open =
-            transport && transport->open.size() == points.size() ? transport->open : sky->openness(points);
-        if (open.size() != points.size())
-            throw Error("propagateBounces(" + voxels.sourceScene + "): the sky's openness has " +
-                        std::to_string(open.size()) + " points, not " + std::to_string(points.size()));
+        std::vector<vec3> skyE;
+        if (sky->irradiance) {
+            skyE = sky->irradiance(points);
+        } else {
+            const std::vector<float> open =
+                transport && transport->open.size() == points.size() ? transport->open : sky->openness(points);
+            skyE.resize(open.size());
+            for (size_t q = 0; q < open.size(); ++q) skyE[q] = sky->radiance * open[q];
+        }
+        if (skyE.size() != points.size())
+            throw Error("propagateBounces(" + voxels.sourceScene + "): the sky's light has " +
+                        std::to_string(skyE.size()) + " points, not " + std::to_string(points.size()));
         const size_t cachePoints = cache.points().size();
         tbb::parallel_for(size_t(0), voxels.size(), [&](size_t i) {
             const VoxelSides sides = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
@@ -226,10 +233,9 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
             for (size_t f = 0; f < 6; ++f) {
                 const int s = sides.sideOfFace[f];
                 if (s < 0) continue;
-                const float openness = sideValue<float>(
-                    weights, i * 6 + size_t(s), [&](uint32_t q) { return open[q]; },
-                    [&](size_t k) { return open[cachePoints + k]; });
-                lit[i][f] += reflectance * sky->radiance * openness;
+                lit[i][f] += reflectance * sideValue<vec3>(
+                                               weights, i * 6 + size_t(s), [&](uint32_t q) { return skyE[q]; },
+                                               [&](size_t k) { return skyE[cachePoints + k]; });
             }
         });
         current = lit;

@@ -97,13 +97,15 @@ struct FaceTransport {
     size_t pointCount() const { return begin.size() - 1; }
 };
 
-// A uniform sky for the bounces (scene.h Sky): what the voxels' surfaces receive from it
-// joins their direct light before the first bounce, at every gather point radiance × its
-// openness (a FaceTransport's `open`, else `openness` of the points), interpolated to the
-// voxels' sides as the bounces' irradiance is.
+// The sky for the bounces (scene.h Sky): what the voxels' surfaces receive from it joins
+// their direct light before the first bounce, interpolated to the voxels' sides as the
+// bounces' irradiance is. At every gather point that is, for a uniform sky, radiance × the
+// point's openness (a FaceTransport's `open`, else `openness` of the points); for a sky with
+// an image, `irradiance` of the points (the receivers' estimate, bake/direct_light.h).
 struct BounceSky {
     vec3 radiance{0.0f};
     std::function<std::vector<float>(const std::vector<GatherPoint>& points)> openness;
+    std::function<std::vector<vec3>(const std::vector<GatherPoint>& points)> irradiance;  // null: uniform
 };
 // E at every point of `transport` from `faces` (TBB-parallel; each point summed in entry
 // order: the same bytes at any thread count). Throws Error when a slot lies past `faces`.

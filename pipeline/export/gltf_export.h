@@ -44,7 +44,7 @@ struct ExportedLightmap {
 // attributes keeps its own vertices and no lightmap (a warning). InputError naming the file
 // when the source no longer reads; Error naming `path` when it cannot be written.
 // `addedCameras` (a job file's, in world space) become camera nodes at the scene's root, so a
-// viewer can show the bake's images' views. A `sky` (scene.h Sky; zero: none), which glTF
+// viewer can show the bake's images' views. A `sky` (scene.h Sky::meanRadiance; zero: none), which glTF
 // cannot hold, goes into the scene's extras as {"voxlight": {"sky": [r, g, b]}} (radiance,
 // W/(m²·sr)): what `voxlight view` draws where nothing is.
 void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Source>& meshes,

@@ -1,5 +1,11 @@
 #include "scene/scene.h"
 
+#include "core/error.h"
+#include "core/image_io.h"
+
+#include <cmath>
+#include <string>
+
 namespace vl {
 
 Aabb Scene::bounds() const {
@@ -34,6 +40,39 @@ bool Scene::hasEmitters() const {
 const Material& Scene::materialOf(const Mesh& mesh) const {
     static const Material kDefault{};
     return mesh.material >= 0 ? materials[static_cast<size_t>(mesh.material)] : kDefault;
+}
+
+vec3 Sky::meanRadiance() const {
+    if (!image || image->texels.empty()) return radiance;
+    glm::dvec3 sum(0.0);
+    double weights = 0.0;
+    for (int y = 0; y < image->height; ++y) {
+        const double w = std::sin(kPi * (double(y) + 0.5) / double(image->height));
+        for (int x = 0; x < image->width; ++x) sum += w * glm::dvec3(image->texels[size_t(y) * size_t(image->width) + size_t(x)]);
+        weights += w * double(image->width);
+    }
+    return radiance + intensity * vec3(sum / weights);
+}
+
+std::shared_ptr<const SkyImage> loadSkyImage(const std::string& path) {
+    const Image image = readImage(path);
+    if (image.width < 2 || image.height < 1 || image.channels < 1)
+        throw InputError(path + ": a sky image needs at least 2 x 1 pixels, not " + std::to_string(image.width) + " x " +
+                         std::to_string(image.height));
+    auto sky = std::make_shared<SkyImage>();
+    sky->path = path;
+    sky->width = image.width;
+    sky->height = image.height;
+    sky->texels.resize(size_t(image.width) * size_t(image.height));
+    for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x) {
+            const vec3 c = image.channels >= 3 ? image.rgb(x, y) : vec3(image.at(x, y, 0));
+            if (!isFinite(c) || glm::min(c.x, glm::min(c.y, c.z)) < 0.0f)
+                throw InputError(path + ": the sky image's pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                                 ") is negative or not finite");
+            sky->texels[size_t(y) * size_t(image.width) + size_t(x)] = c;
+        }
+    return sky;
 }
 
 }  // namespace vl

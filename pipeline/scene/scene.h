@@ -9,6 +9,7 @@
 #include "core/math.h"
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -117,13 +118,33 @@ struct Camera {
     float focusDistance = 1.0f;       // metres along forward
 };
 
-// Light from beyond the scene in every direction not blocked by it: a uniform sky of
-// radiance W/(m²·sr) (Cycles' world colour). glTF has none; a job file's or the command
-// line's `sky` setting gives it (bake_settings.h).
+// An equirectangular HDR image of the sky, linear RGB W/(m²·sr), rows from the top
+// (trace/sky.h: its mapping, Blender's).
+struct SkyImage {
+    std::string path;  // for messages
+    int width = 0, height = 0;
+    std::vector<vec3> texels;
+};
+
+// Light from beyond the scene in every direction not blocked by it: a uniform radiance
+// W/(m²·sr) (Cycles' world colour) plus, optionally, an image turned by `rotationDegrees`
+// counterclockwise seen from above and scaled by `intensity` (Cycles' environment texture
+// and background strength). glTF has none; a job file's or the command line's sky settings
+// give it (bake_settings.h).
 struct Sky {
     vec3 radiance{0.0f};
-    bool present() const { return maxComponent(radiance) > 0.0f; }
+    std::shared_ptr<const SkyImage> image;
+    float rotationDegrees = 0.0f;
+    float intensity = 1.0f;
+    bool present() const { return maxComponent(radiance) > 0.0f || (image && intensity > 0.0f); }
+    // The mean over all directions (each pixel by its solid angle): one colour for viewers.
+    vec3 meanRadiance() const;
 };
+
+// The image at `path` (.hdr, .exr or anything OpenImageIO reads) as a sky: InputError naming
+// the file and the pixel for a missing or unreadable file, fewer than three channels' worth
+// of colour (one channel is grey), or a negative or non-finite value.
+std::shared_ptr<const SkyImage> loadSkyImage(const std::string& path);
 
 // Positions, directions and lengths are in metres in the scene's local frame: world =
 // origin + local, origin the centre of the geometry's bounding box, found in double precision

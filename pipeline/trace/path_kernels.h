@@ -7,7 +7,9 @@
 // by the power heuristic; emitters hit by a BSDF ray get the matching MIS weight (1 after
 // a delta lobe or for the camera's own ray). Russian roulette (ERRATA eq. 16, c = 0) from
 // bounce `rouletteStart` on, survival probability min(1, max throughput). A path that leaves
-// the scene sees the uniform sky (TraceSceneView::skyRadiance), by BSDF sampling alone.
+// the scene sees the sky (TraceSceneView::sky): its uniform part by BSDF sampling alone,
+// its image also by a direction drawn from the image at every diffuse vertex, the two
+// combined by the power heuristic.
 //
 // Bounce counting follows Cycles: max bounces B means light scattered at most B + 1 times
 // on its way to the sensor (B = 0 is direct light only). "Direct" is light scattered once
@@ -139,6 +141,37 @@ VL_HOSTDEV inline vec3 emitterIrradianceSample(const TraceSceneView& s, const Bv
     return le * (cosS * weight / pdf);
 }
 
+// One direction drawn from the sky's image for a diffuse lobe about ns: its radiance ·
+// cos θ · w_MIS / pdf (to be multiplied by albedo/π), zero when blocked or below the surface.
+// Draws no random numbers without an image, so such scenes keep their sequences.
+VL_HOSTDEV inline vec3 skyImageIrradianceSample(const TraceSceneView& s, const BvhView& bvh, const vec3& p,
+                                                const vec3& ng, const vec3& ns, Pcg32& rng) {
+    if (!s.sky.samplable()) return vec3(0.0f);
+    vec2 u;
+    rng.next2D(u.x, u.y);
+    float pdf = 0.0f;
+    const vec3 wi = sampleSkyImage(s.sky, u, pdf);
+    if (!(pdf > 0.0f)) return vec3(0.0f);
+    const float cosS = glm::dot(ns, wi);
+    if (cosS <= 0.0f || glm::dot(ng, wi) <= 0.0f) return vec3(0.0f);
+    Ray ray;
+    ray.origin = offsetRayOrigin(p, ng, bvh.extent);
+    ray.direction = wi;
+    if (intersectAny(bvh, ray)) return vec3(0.0f);
+    const vec3 image = skyRadianceAlong(s.sky, wi) - s.sky.uniform;  // what the draw estimates
+    const vec3 contribution = image * (cosS * powerHeuristic(pdf, cosS * kInvPi) / pdf);
+    return isFinite(contribution) ? contribution : vec3(0.0f);
+}
+
+// What a path that leaves the scene along wi sees, its image part weighted against the
+// image's own draws (bsdfPdf 0: the camera's ray or a delta lobe, no weight).
+VL_HOSTDEV inline vec3 escapedRadiance(const SkyView& sky, const vec3& wi, float bsdfPdf) {
+    if (!sky.hasImage()) return sky.uniform;
+    const vec3 image = skyRadianceAlong(sky, wi) - sky.uniform;
+    const float weight = bsdfPdf > 0.0f && sky.samplable() ? powerHeuristic(bsdfPdf, skyImagePdf(sky, wi)) : 1.0f;
+    return sky.uniform + image * weight;
+}
+
 // The solid-angle pdf with which light sampling would have produced the direction that hit
 // emitter triangle `hit` at distance t (for the MIS weight of a BSDF-sampled hit).
 VL_HOSTDEV inline float emitterPdf(const TraceSceneView& s, const SurfaceHit& hit, const vec3& direction, float t) {
@@ -179,6 +212,7 @@ VL_HOSTDEV inline void continuePath(const TraceSceneView& s, const BvhView& bvh,
             if (s.sunDisks > 0) rng.next2D(sun.x, sun.y);
             vec3 incident = punctualIrradiance(s, bvh, h.position, ng, ns, sun);
             incident += emitterIrradianceSample(s, bvh, h.position, ng, ns, rng);
+            incident += skyImageIrradianceSample(s, bvh, h.position, ng, ns, rng);
             const vec3 contribution = fOverPi * incident;
             if (isFinite(contribution)) sink += contribution;
             vec2 u;
@@ -205,9 +239,10 @@ VL_HOSTDEV inline void continuePath(const TraceSceneView& s, const BvhView& bvh,
         ray.direction = wi;
         Hit hit;
         if (!intersectClosest(bvh, ray, hit)) {
-            // Out of the scene: the sky, by BSDF sampling alone (no next-event estimation of
-            // a uniform sky; a diffuse lobe's cosine sampling is its own importance sampling).
-            const vec3 contribution = beta * s.skyRadiance;
+            // Out of the scene: the sky. Its uniform part by BSDF sampling alone (a diffuse
+            // lobe's cosine sampling is its own importance sampling), its image weighted
+            // against the image's draws.
+            const vec3 contribution = beta * escapedRadiance(s.sky, wi, delta ? 0.0f : bsdfPdf);
             if (isFinite(contribution)) sink += contribution;
             return;
         }
@@ -230,7 +265,7 @@ VL_HOSTDEV inline PathSample traceCameraPath(const TraceSceneView& s, const BvhV
     PathSample out;
     Hit hit;
     if (!intersectClosest(bvh, ray, hit)) {
-        out.direct = s.skyRadiance;
+        out.direct = skyRadianceAlong(s.sky, ray.direction);
         return out;
     }
     const SurfaceHit h = surfaceAt(s, hit.triangle, hit.b1, hit.b2);

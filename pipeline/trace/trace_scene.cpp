@@ -165,7 +165,65 @@ TraceScene TraceScene::build(const Scene& scene, const SceneTriangles& triangles
 
     if (!isFinite(scene.sky.radiance) || glm::min(scene.sky.radiance.x, glm::min(scene.sky.radiance.y, scene.sky.radiance.z)) < 0.0f)
         throw InputError(scene.sourcePath + ": the sky's radiance is negative or not finite");
-    out.skyRadiance = scene.sky.radiance;
+    out.skyUniform = scene.sky.radiance;
+    if (scene.sky.image && scene.sky.intensity > 0.0f) {
+        if (!(std::isfinite(scene.sky.intensity) && std::isfinite(scene.sky.rotationDegrees)))
+            throw InputError(scene.sourcePath + ": the sky's intensity or rotation is not finite");
+        const SkyImage& image = *scene.sky.image;
+        if (image.width < 1 || image.height < 1 || image.texels.size() != size_t(image.width) * size_t(image.height))
+            throw Error(image.path + ": the sky image holds " + std::to_string(image.texels.size()) + " texels for " +
+                        std::to_string(image.width) + " x " + std::to_string(image.height));
+        out.skyImage = scene.sky.image;
+        out.skyIntensity = scene.sky.intensity;
+        out.skyRotationRadians = glm::radians(scene.sky.rotationDegrees);
+        // Pixels in proportion to luminance × sin θ (their solid angle), summed in double. A
+        // pixel's luminance is the most the bilinear lookup shows anywhere inside it: at its
+        // centre, its edges' middles or its corners, where it blends its neighbours. Drawn by
+        // its own value, a pixel next to the sun was drawn as seldom as the sky around it
+        // while it shows up to half the sun, and a receiver's cosine rays that hit it came
+        // out 170% high (an open floor under a 4° sun: texels 2.2% RMS, 7.6% at worst with the
+        // bound; 2.4% / 8.7% with the brightest of the 3 × 3, 3.6% / 18% with their mean).
+        const size_t w = size_t(image.width), h = size_t(image.height);
+        std::vector<float> lum(w * h);
+        for (size_t k = 0; k < w * h; ++k) lum[k] = glm::max(0.0f, luminance(image.texels[k]));
+        const auto at = [&](long x, long y) { return lum[size_t(glm::clamp(y, 0l, long(h) - 1)) * w + size_t((x + long(w)) % long(w))]; };
+        const auto brightest = [&](size_t px, size_t py) {
+            const long x = long(px), y = long(py);
+            const float own = at(x, y);
+            float m = own;
+            for (int d : {-1, 1}) m = glm::max(m, glm::max(0.5f * (own + at(x + d, y)), 0.5f * (own + at(x, y + d))));
+            for (int dy : {-1, 1})
+                for (int dx : {-1, 1})
+                    m = glm::max(m, 0.25f * (own + at(x + dx, y) + at(x, y + dy) + at(x + dx, y + dy)));
+            return m;
+        };
+        std::vector<double> rowSums(h, 0.0);
+        std::vector<float> columnCdf(w * h, 0.0f);
+        for (size_t y = 0; y < h; ++y) {
+            const double sinTheta = std::sin(kPi * (double(y) + 0.5) / double(h));
+            double sum = 0.0;
+            std::vector<double> running(w);
+            for (size_t x = 0; x < w; ++x) {
+                sum += double(brightest(x, y)) * sinTheta;
+                running[x] = sum;
+            }
+            rowSums[y] = sum;
+            for (size_t x = 0; x < w; ++x) columnCdf[y * w + x] = sum > 0.0 ? float(running[x] / sum) : float(x + 1) / float(w);
+            columnCdf[y * w + w - 1] = 1.0f;
+        }
+        double total = 0.0;
+        for (double r : rowSums) total += r;
+        if (total > 0.0) {
+            out.skyRowCdf.resize(h);
+            double running = 0.0;
+            for (size_t y = 0; y < h; ++y) {
+                running += rowSums[y];
+                out.skyRowCdf[y] = float(running / total);
+            }
+            out.skyRowCdf[h - 1] = 1.0f;
+            out.skyColumnCdf = std::move(columnCdf);
+        }
+    }
 
     // Emissive triangles, picked in proportion to area × mean emission (their power up to
     // the emissive texture).
@@ -241,7 +299,17 @@ TraceSceneView TraceScene::view() const {
     v.emitterSelectPdf = emitterSelectPdf.empty() ? nullptr : emitterSelectPdf.data();
     v.emitterQuad = emitterQuad.empty() ? nullptr : emitterQuad.data();
     v.emitterCount = static_cast<uint32_t>(emitters.size());
-    v.skyRadiance = skyRadiance;
+    v.sky.uniform = skyUniform;
+    if (skyImage) {
+        v.sky.texels = skyImage->texels.data();
+        v.sky.width = skyImage->width;
+        v.sky.height = skyImage->height;
+        v.sky.intensity = skyIntensity;
+        v.sky.cosTurn = std::cos(skyRotationRadians);
+        v.sky.sinTurn = std::sin(skyRotationRadians);
+        v.sky.rowCdf = skyRowCdf.empty() ? nullptr : skyRowCdf.data();
+        v.sky.columnCdf = skyColumnCdf.empty() ? nullptr : skyColumnCdf.data();
+    }
     for (const TraceLight& light : lights) v.sunDisks += light.cosHalfAngle < 1.0f ? 1 : 0;
     return v;
 }
@@ -251,7 +319,8 @@ size_t TraceScene::memoryBytes() const {
            uv1.size() * sizeof(vec2) + colors.size() * sizeof(vec4) + materialIds.size() * sizeof(uint32_t) +
            materials.size() * sizeof(TraceMaterial) + textures.size() * sizeof(TraceTexture) +
            texels.size() * sizeof(float) + lights.size() * sizeof(TraceLight) + emitters.size() * sizeof(uint32_t) +
-           emitterCdf.size() * sizeof(float) + emitterSelectPdf.size() * sizeof(float) + emitterQuad.size();
+           emitterCdf.size() * sizeof(float) + emitterSelectPdf.size() * sizeof(float) + emitterQuad.size() +
+           (skyImage ? skyImage->texels.size() * sizeof(vec3) : 0) + (skyRowCdf.size() + skyColumnCdf.size()) * sizeof(float);
 }
 
 }  // namespace vl

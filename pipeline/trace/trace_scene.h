@@ -8,13 +8,16 @@
 
 #include "core/math.h"
 #include "trace/materials.h"
+#include "trace/sky.h"
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace vl {
 
 struct Scene;
+struct SkyImage;
 struct SceneTriangles;
 
 // RGBA float texels, row-major from the top row, starting at TraceSceneView::texels + offset.
@@ -85,7 +88,7 @@ struct TraceSceneView {
     const int8_t* emitterQuad = nullptr;
     uint32_t emitterCount = 0;
 
-    vec3 skyRadiance{0.0f};  // Scene::sky: what a ray that leaves the scene sees
+    SkyView sky;  // Scene::sky: what a ray that leaves the scene sees
     // Some directional light has a disk (TraceLight::cosHalfAngle < 1): only then do paths
     // draw a point of it, so scenes without one keep their random sequences.
     int sunDisks = 0;
@@ -115,7 +118,11 @@ public:
     std::vector<float> emitterCdf;
     std::vector<float> emitterSelectPdf;
     std::vector<int8_t> emitterQuad;
-    vec3 skyRadiance{0.0f};
+    // Scene::sky: its uniform part, image (sky.h) and the image's sampling tables.
+    vec3 skyUniform{0.0f};
+    std::shared_ptr<const SkyImage> skyImage;
+    float skyIntensity = 1.0f, skyRotationRadians = 0.0f;
+    std::vector<float> skyRowCdf, skyColumnCdf;
 };
 
 // ---- Surface queries (VL_HOSTDEV) ------------------------------------------------------

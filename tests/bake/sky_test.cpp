@@ -168,9 +168,9 @@ TEST_CASE("A sky is set globally or per scene in a job file and refused when mal
     std::ofstream(dir / "shapeless.json") << R"({"sky": [1, 1, 1], "scenes": [{"path": "a.gltf"}]})";
     CHECK_THROWS_WITH(readJobFile((dir / "shapeless.json").string(), BakeSettings{}, "output"),
                       Catch::Contains("shapeless.json") && Catch::Contains("\"sky\" must be an object"));
-    std::ofstream(dir / "unknown.json") << R"({"sky": {"radiance": 1, "image": "sky.hdr"}, "scenes": [{"path": "a.gltf"}]})";
+    std::ofstream(dir / "unknown.json") << R"({"sky": {"radiance": 1, "colour": "blue"}, "scenes": [{"path": "a.gltf"}]})";
     CHECK_THROWS_WITH(readJobFile((dir / "unknown.json").string(), BakeSettings{}, "output"),
-                      Catch::Contains("unknown.json") && Catch::Contains("unknown key \"image\""));
+                      Catch::Contains("unknown.json") && Catch::Contains("unknown key \"colour\""));
     BakeSettings settings;
     CHECK_THROWS_WITH(applySetting(bakeSettingsTable(), settings, "sky", "1,2"), Catch::Contains("not R,G,B"));
     CHECK_THROWS_WITH(applySetting(bakeSettingsTable(), settings, "sky", "nan"), Catch::Contains("sky"));

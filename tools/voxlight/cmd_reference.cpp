@@ -57,7 +57,8 @@ struct ReferenceOptions {
     bool strict = false;
     bool quiet = false;
     std::string device = "cpu";
-    std::string sky;  // the bake setting's form: R,G,B or one value
+    std::string sky;  // the bake settings' forms: R,G,B or one value; a path; degrees; a scale
+    std::string skyImage, skyRotation, skyIntensity;
 };
 
 using Clock = std::chrono::steady_clock;
@@ -125,10 +126,14 @@ void runReference(const ReferenceOptions& o) {
     LoadOptions load;
     load.strict = o.strict;
     Scene scene = loadGltf(o.scene, load);
-    if (!o.sky.empty()) {
-        BakeSettings parsed;  // the one parser of a sky's radiance: the bake setting's
-        applySetting(bakeSettingsTable(), parsed, "sky", o.sky);
-        scene.sky.radiance = parsed.sky;
+    {
+        BakeSettings parsed;  // the one parser of a sky: the bake settings'
+        for (const auto& [name, value] : {std::pair<const char*, const std::string&>{"sky", o.sky},
+                                          {"sky-image", o.skyImage},
+                                          {"sky-rotation", o.skyRotation},
+                                          {"sky-intensity", o.skyIntensity}})
+            if (!value.empty()) applySetting(bakeSettingsTable(), parsed, name, value);
+        applySkySettings(parsed, scene);
     }
     timings["load"] = secondsSince(t);
     if (!o.noLightmap) checkAtlasGroups(scene, lightmap);  // before a render that may take minutes
@@ -286,6 +291,9 @@ void addReferenceCommand(CLI::App& app) {
     cmd->add_flag("--strict", o->strict, "treat every warning as an error");
     cmd->add_flag("-q,--quiet", o->quiet, "no progress output");
     cmd->add_option("--sky", o->sky, "a uniform sky's radiance R,G,B in W/(m²·sr), seen by every path that leaves the scene (default: none)");
+    cmd->add_option("--sky-image", o->skyImage, "an equirectangular HDR image of the sky (.hdr, .exr), mapped as Blender maps it (default: none)");
+    cmd->add_option("--sky-rotation", o->skyRotation, "degrees the sky image turns about +Y, counterclockwise seen from above (default 0)");
+    cmd->add_option("--sky-intensity", o->skyIntensity, "scale of the sky image's radiance (default 1)");
     cmd->add_option("--device", o->device,
                     "cpu | cuda | auto: auto takes the GPU when one is usable, else says why it runs on the CPU "
                     "(default cpu)");

@@ -1,0 +1,124 @@
+// What a ray that leaves the scene sees: a uniform radiance plus, optionally, an
+// equirectangular image turned about +Y and scaled (scene.h Sky). The kernels' side: look up,
+// importance-sample and give the pdf of a direction (VL_HOSTDEV, no allocation).
+//
+// The image's mapping is Blender's (Cycles' environment texture, equirectangular, as the
+// glTF importer places the scene: glTF (x, y, z) is Blender (x, −z, y)), so an HDR looks the
+// same in voxlight as in Blender. For a unit direction e in the image's frame:
+//   column = W·(½ + atan2(e.z, e.x)/2π)   (0 at the image's left edge)
+//   row    = H·acos(e.y)/π                 (0 at the top edge: straight up)
+// The image's centre looks along +X, its left quarter along −Z. A rotation of θ turns the sky
+// counterclockwise seen from above: L(d) = intensity·image(R_y(−θ)·d) + uniform. Lookups are
+// bilinear between pixel centres, wrapping around in azimuth (Cycles' Linear interpolation).
+//
+// Sampling draws a pixel in proportion to its luminance × sin θ (its solid angle), then a
+// uniform point of it in (column, row): pdf(d) = p(pixel)·W·H / (2π²·sin θ) in solid angle.
+#pragma once
+
+#include "core/math.h"
+
+namespace vl {
+
+struct SkyView {
+    vec3 uniform{0.0f};           // W/(m²·sr) in every direction
+    const vec3* texels = nullptr;  // width × height, rows from the top; null: no image
+    int width = 0, height = 0;
+    float intensity = 1.0f;
+    float cosTurn = 1.0f, sinTurn = 0.0f;  // of the rotation θ
+    // Sampling tables (null when the image is black): per row the inclusive marginal CDF
+    // (rowCdf[height - 1] = 1), per row and column the inclusive conditional CDF.
+    const float* rowCdf = nullptr;
+    const float* columnCdf = nullptr;
+
+    VL_HOSTDEV bool hasImage() const { return texels != nullptr && width > 0 && height > 0; }
+    VL_HOSTDEV bool samplable() const { return hasImage() && rowCdf != nullptr && columnCdf != nullptr; }
+    VL_HOSTDEV bool present() const { return maxComponent(uniform) > 0.0f || (hasImage() && intensity > 0.0f); }
+
+    // World direction to the image's frame (R_y(−θ)) and back (R_y(θ)).
+    VL_HOSTDEV vec3 toImage(const vec3& d) const {
+        return vec3(cosTurn * d.x - sinTurn * d.z, d.y, sinTurn * d.x + cosTurn * d.z);
+    }
+    VL_HOSTDEV vec3 fromImage(const vec3& e) const {
+        return vec3(cosTurn * e.x + sinTurn * e.z, e.y, -sinTurn * e.x + cosTurn * e.z);
+    }
+    // Continuous (column, row) of an image-frame unit direction.
+    VL_HOSTDEV vec2 imageCoordinates(const vec3& e) const {
+        const float u = 0.5f + glm::atan(e.z, e.x) * (0.5f * kInvPi);
+        const float v = glm::acos(glm::clamp(e.y, -1.0f, 1.0f)) * kInvPi;
+        return vec2(u * float(width), v * float(height));
+    }
+    VL_HOSTDEV vec3 texel(int column, int row) const {
+        column %= width;
+        if (column < 0) column += width;
+        row = glm::clamp(row, 0, height - 1);
+        return texels[size_t(row) * size_t(width) + size_t(column)];
+    }
+};
+
+// Radiance seen along unit direction d.
+VL_HOSTDEV inline vec3 skyRadianceAlong(const SkyView& sky, const vec3& d) {
+    vec3 L = sky.uniform;
+    if (!sky.hasImage()) return L;
+    const vec2 p = sky.imageCoordinates(sky.toImage(d)) - vec2(0.5f);
+    const float fx = glm::floor(p.x), fy = glm::floor(p.y);
+    const int x = int(fx), y = int(fy);
+    const float tx = p.x - fx, ty = p.y - fy;
+    const vec3 top = (1.0f - tx) * sky.texel(x, y) + tx * sky.texel(x + 1, y);
+    const vec3 bottom = (1.0f - tx) * sky.texel(x, y + 1) + tx * sky.texel(x + 1, y + 1);
+    return L + sky.intensity * ((1.0f - ty) * top + ty * bottom);
+}
+
+// First index whose inclusive CDF value exceeds u (the last where rounding leaves none).
+VL_HOSTDEV inline int searchCdf(const float* cdf, int n, float u) {
+    int lo = 0, hi = n - 1;
+    while (lo < hi) {
+        const int mid = (lo + hi) / 2;
+        if (cdf[mid] > u)
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    return lo;
+}
+
+VL_HOSTDEV inline float cdfStep(const float* cdf, int i) { return cdf[i] - (i > 0 ? cdf[i - 1] : 0.0f); }
+
+// The solid-angle pdf with which sampleSkyImage draws unit direction d (0 without tables).
+VL_HOSTDEV inline float skyImagePdf(const SkyView& sky, const vec3& d) {
+    if (!sky.samplable()) return 0.0f;
+    const vec3 e = sky.toImage(d);
+    const float sinTheta = glm::sqrt(glm::max(0.0f, 1.0f - e.y * e.y));
+    if (!(sinTheta > 0.0f)) return 0.0f;
+    const vec2 p = sky.imageCoordinates(e);
+    const int row = glm::clamp(int(p.y), 0, sky.height - 1);
+    const int column = glm::clamp(int(p.x), 0, sky.width - 1);
+    const float pixel = cdfStep(sky.rowCdf, row) * cdfStep(sky.columnCdf + size_t(row) * size_t(sky.width), column);
+    return pixel * float(sky.width) * float(sky.height) / (2.0f * kPi * kPi * sinTheta);
+}
+
+// A direction drawn from the image's distribution at u ∈ [0, 1)²; pdf its solid-angle pdf
+// (0: nothing drawn).
+VL_HOSTDEV inline vec3 sampleSkyImage(const SkyView& sky, vec2 u, float& pdf) {
+    pdf = 0.0f;
+    if (!sky.samplable()) return vec3(0.0f, 1.0f, 0.0f);
+    const int row = searchCdf(sky.rowCdf, sky.height, u.x);
+    const float rowLow = row > 0 ? sky.rowCdf[row - 1] : 0.0f;
+    const float rowP = sky.rowCdf[row] - rowLow;
+    const float* columns = sky.columnCdf + size_t(row) * size_t(sky.width);
+    const int column = searchCdf(columns, sky.width, u.y);
+    const float columnLow = column > 0 ? columns[column - 1] : 0.0f;
+    const float columnP = columns[column] - columnLow;
+    if (!(rowP > 0.0f) || !(columnP > 0.0f)) return vec3(0.0f, 1.0f, 0.0f);
+    // The same uniforms, rescaled within the chosen row and column, place the point inside it.
+    const float fy = glm::clamp((u.x - rowLow) / rowP, 0.0f, 1.0f);
+    const float fx = glm::clamp((u.y - columnLow) / columnP, 0.0f, 1.0f);
+    const float theta = (float(row) + fy) / float(sky.height) * kPi;
+    const float phi = ((float(column) + fx) / float(sky.width) - 0.5f) * 2.0f * kPi;
+    const float sinTheta = glm::sin(theta);
+    if (!(sinTheta > 0.0f)) return vec3(0.0f, 1.0f, 0.0f);
+    const vec3 e(sinTheta * glm::cos(phi), glm::cos(theta), sinTheta * glm::sin(phi));
+    pdf = rowP * columnP * float(sky.width) * float(sky.height) / (2.0f * kPi * kPi * sinTheta);
+    return sky.fromImage(e);
+}
+
+}  // namespace vl
