@@ -20,11 +20,13 @@ namespace {
 
 constexpr int kCoordLimit = 1 << 20;  // as radiance_mips.cpp: coordinates within ±2^20
 
-// A voxel side, keyed by its cell and face class; sorted by key, then by voxel, so the
-// points and their sums come out the same at any thread count.
+// A voxel side, keyed by its cell and face class, then by its voxel's coordinate along the
+// class's axis (`depth`); sorted by key, depth and voxel, so the points and their sums come
+// out the same at any thread count.
 struct Side {
     ivec3 cell;
     int faceClass;
+    int depth;
     uint32_t voxel;
     vec3 normal;
 
@@ -34,6 +36,7 @@ struct Side {
         if (cell.y != o.cell.y) return cell.y < o.cell.y;
         if (cell.z != o.cell.z) return cell.z < o.cell.z;
         if (faceClass != o.faceClass) return faceClass < o.faceClass;
+        if (depth != o.depth) return depth < o.depth;
         return voxel < o.voxel;
     }
 };
@@ -61,8 +64,10 @@ IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level) : level_(l
                         " lies beyond ±2^20 voxels");
         const VoxelSides s = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
         const ivec3 cell(cellOf(c.x, level), cellOf(c.y, level), cellOf(c.z, level));
-        for (int k = 0; k < s.count; ++k)
-            sides.push_back({cell, dominantAxisFace(s.normal[k]), static_cast<uint32_t>(i), s.normal[k]});
+        for (int k = 0; k < s.count; ++k) {
+            const int faceClass = dominantAxisFace(s.normal[k]);
+            sides.push_back({cell, faceClass, c[faceClass / 2], static_cast<uint32_t>(i), s.normal[k]});
+        }
     }
     tbb::parallel_sort(sides.begin(), sides.end());
     // The voxels' centre, for the points' frames (gatherFrame).
@@ -76,10 +81,17 @@ IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level) : level_(l
 
     nanovdb::GridBuilder<int32_t> builder(-1);
     auto accessor = builder.getAccessor();
+    // One point per layer of a class's sides in a cell: sides whose depths leave a gap of a
+    // voxel or more are different surfaces (a wall's two faces 0.15 m apart, 3 voxels, in one
+    // cell: the −x point of both, averaged into the wall between them, lifted inside it and
+    // seen by no receiver, left a window-lit room's walls without indirect light in every
+    // cell's middle). A tilted surface steps one voxel at a time and stays one point.
     for (size_t begin = 0; begin < sides.size();) {
         size_t end = begin;
         glm::dvec3 position(0.0), normal(0.0);
-        for (; end < sides.size() && sides[end].sameKey(sides[begin]); ++end) {
+        for (; end < sides.size() && sides[end].sameKey(sides[begin]) &&
+               (end == begin || sides[end].depth - sides[end - 1].depth <= 1);
+             ++end) {
             position += glm::dvec3(voxels.centre(sides[end].voxel));
             normal += glm::dvec3(sides[end].normal);
         }
