@@ -69,16 +69,16 @@ VL_HOSTDEV inline vec3 skyRadianceAlong(const SkyView& sky, const vec3& d) {
 }
 
 // First index whose inclusive CDF value exceeds u (the last where rounding leaves none).
+// Branch-free halving (a conditional move per step): the branchy search's mispredictions
+// were a fifth of the receivers' time under an image sky (perf annotate).
 VL_HOSTDEV inline int searchCdf(const float* cdf, int n, float u) {
-    int lo = 0, hi = n - 1;
-    while (lo < hi) {
-        const int mid = (lo + hi) / 2;
-        if (cdf[mid] > u)
-            hi = mid;
-        else
-            lo = mid + 1;
+    int base = 0;
+    for (int length = n; length > 1;) {
+        const int half = length / 2;
+        base = cdf[base + half - 1] <= u ? base + half : base;
+        length -= half;
     }
-    return lo;
+    return base;
 }
 
 VL_HOSTDEV inline float cdfStep(const float* cdf, int i) { return cdf[i] - (i > 0 ? cdf[i - 1] : 0.0f); }
