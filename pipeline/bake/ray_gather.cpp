@@ -59,6 +59,11 @@ RayFan rayFan(const GatherPoint& point, float h, const BvhView& bvh, const Trace
         Hit hit;
         if (!intersectClosest(bvh, back, hit)) continue;
         const vec3 n = surfaceAt(scene, hit.triangle, hit.b1, hit.b2).geometricNormal;
+        // Only the point's own surface, which faces its way: at a wall's top edge the ray
+        // back under a point leaning 3° up passed over the edge onto the roof, and half the
+        // fan's rays, leaving that roof downward, read its sunlit top as light arriving at the
+        // wall (a window-lit room's outer walls 0.21 too bright along the roof: 50% off).
+        if (glm::abs(glm::dot(n, point.normal)) < 0.5f) continue;
         fan.origin = offsetRayOrigin(back.at(hit.t), glm::dot(n, point.normal) >= 0.0f ? n : -n, bvh.extent);
         break;
     }

@@ -513,13 +513,16 @@ CameraReceivers buildCameraReceivers(const TraceScene& scene, const Bvh& bvh, co
     std::vector<std::vector<uint32_t>> rowCounts(static_cast<size_t>(H));
     // Per pixel: the first emissive triangle its shading rays hit (kNoTriangle: none).
     std::vector<uint32_t> firstEmitter(static_cast<size_t>(W) * static_cast<size_t>(H), kNoTriangle);
+    // The sky seen directly, apart from the emitters' light, and how many rays left the scene.
+    Image skySeen(W, H, 3);
+    std::vector<int> skyRays(static_cast<size_t>(W) * static_cast<size_t>(H), 0);
     const float weight = 1.0f / static_cast<float>(n * n);
     tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& range) {
         for (int y = range.begin(); y < range.end(); ++y) {
             auto& samples = rows[static_cast<size_t>(y)];
             auto& counts = rowCounts[static_cast<size_t>(y)];
             for (int x = 0; x < W; ++x) {
-                vec3 emission(0.0f), albedo(0.0f);
+                vec3 emission(0.0f), albedo(0.0f), sky(0.0f);
                 uint32_t hits = 0, pixelSamples = 0;
                 for (int j = 0; j < n; ++j)
                     for (int i = 0; i < n; ++i) {
@@ -527,7 +530,8 @@ CameraReceivers buildCameraReceivers(const TraceScene& scene, const Bvh& bvh, co
                         const Ray ray = pinholeRay(camera, film);
                         Hit hit;
                         if (!intersectClosest(bv, ray, hit)) {  // the sky, seen directly
-                            emission += skyRadianceAlong(sv.sky, ray.direction) * weight;
+                            sky += skyRadianceAlong(sv.sky, ray.direction) * weight;
+                            ++skyRays[size_t(y) * size_t(W) + size_t(x)];
                             continue;
                         }
                         const SurfaceHit h = surfaceAt(sv, hit.triangle, hit.b1, hit.b2);
@@ -569,6 +573,7 @@ CameraReceivers buildCameraReceivers(const TraceScene& scene, const Bvh& bvh, co
                     samples[k].normal = glm::normalize(samples[k].normal);
                 counts.push_back(pixelSamples);
                 out.emission.setRgb(x, y, emission);
+                skySeen.setRgb(x, y, sky);
                 out.albedo.setRgb(x, y, albedo);
                 out.mask.at(x, y) = static_cast<float>(hits) * weight;
             }
@@ -655,6 +660,53 @@ CameraReceivers buildCameraReceivers(const TraceScene& scene, const Bvh& bvh, co
                 }
         });
     }
+    if (sv.sky.present() && emissionSubsamplesPerAxis > n) {
+        // The sky's edges as the emitters' (above): where the shading grid's rays both left
+        // the scene and met it, in a pixel or its neighbours, the finer grid measures the
+        // share of the pixel that sees the sky and what it sees there, and the pixel's
+        // surface samples carry the rest. A window's edge pixel half sky, half wall, read
+        // from 2 × 2 rays, was 0, ½ or 1 of the sky: most of a window-lit room's image error.
+        // A pixel whose shading rays all left has no surface sample to carry a share, and
+        // keeps the shading grid's sky.
+        const int ne = emissionSubsamplesPerAxis, all = n * n;
+        tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& range) {
+            for (int y = range.begin(); y < range.end(); ++y) {
+                size_t first = 0;  // the pixel's samples in rows[y]
+                for (int x = 0; x < W; ++x) {
+                    const uint32_t count = rowCounts[size_t(y)][size_t(x)];
+                    const size_t begin = first;
+                    first += count;
+                    const int coarse = skyRays[size_t(y) * size_t(W) + size_t(x)];
+                    if (coarse == all || count == 0) continue;
+                    int least = all, most = 0;
+                    for (int v = std::max(y - 1, 0); v <= std::min(y + 1, H - 1); ++v)
+                        for (int u = std::max(x - 1, 0); u <= std::min(x + 1, W - 1); ++u) {
+                            least = std::min(least, skyRays[size_t(v) * size_t(W) + size_t(u)]);
+                            most = std::max(most, skyRays[size_t(v) * size_t(W) + size_t(u)]);
+                        }
+                    if (most == 0 || least == all) continue;  // no sky near, or no surface near
+                    vec3 sky(0.0f);
+                    int left = 0;
+                    for (int j = 0; j < ne; ++j)
+                        for (int i = 0; i < ne; ++i) {
+                            const Ray ray = pinholeRay(camera, vec2(x + (i + 0.5f) / ne, y + (j + 0.5f) / ne));
+                            Hit hit;
+                            if (intersectClosest(bv, ray, hit)) continue;
+                            sky += skyRadianceAlong(sv.sky, ray.direction);
+                            ++left;
+                        }
+                    const float rays = static_cast<float>(ne * ne);
+                    const float surface = 1.0f - static_cast<float>(left) / rays;
+                    const float scale = surface / (1.0f - static_cast<float>(coarse) / static_cast<float>(all));
+                    skySeen.setRgb(x, y, sky / rays);
+                    for (size_t k = begin; k < begin + count; ++k) rows[size_t(y)][k].weight *= scale;
+                    out.albedo.setRgb(x, y, out.albedo.rgb(x, y) * scale);
+                    out.mask.at(x, y) = surface;
+                }
+            }
+        });
+    }
+    for (size_t k = 0; k < out.emission.pixels.size(); ++k) out.emission.pixels[k] += skySeen.pixels[k];
     SurfaceSampleSet& set = out.receivers;
     set.width = W;
     set.height = H;

@@ -4,12 +4,38 @@
 #
 #   blender -b --factory-startup --python-exit-code 1 --python tools/bench/cycles_bake.py -- \
 #       --scene scene.gltf --out DIR --spp 64 [--lightmap-res 256] [--width 256 --height 256]
-#       [--no-lightmap] [--no-image] [--seed 1]
+#       [--no-lightmap] [--no-image] [--seed 1] [--mask]
+#       [--sky R,G,B | --sky-image PATH [--sky-rotation DEG] [--sky-intensity S]
+#                                       [--sky-interpolation Linear|Closest]]
 #
 # Writes DIR/lightmap.exr, DIR/lightmap_direct.exr, DIR/image.exr (linear float) and
 # DIR/cycles.json (seconds of each bake and render, peak memory). Settings as the Cycles
 # references in ../shared/reference: CPU, 64 bounces of every kind, no clamping, no light
 # threshold, no adaptive sampling, no denoising, 1-pixel box filter, black world.
+#
+# Optional:
+# --mask          also DIR/lightmap_mask.exr: 1 where Cycles' bake wrote a texel (its centre
+#                 lies in a TEXCOORD_1 triangle of a baked mesh), 0 in padding. The total bake
+#                 then starts from a -1 sentinel instead of Blender's clear; the lightmap's
+#                 bytes are the same (padding is written as 0).
+# --sky R,G,B     a uniform world of radiance (R, G, B) W/(m^2 sr): Background colour, strength 1.
+# --sky-image P   an equirectangular HDR world (Environment Texture, read as Non-Color: the
+#                 file's linear values are radiance in W/(m^2 sr), no colour transform), with
+#                 world importance sampling ("Sample as light", MIS) on a map of the image's own
+#                 resolution (MANUAL, sample_map_resolution = image width: width x width/2).
+#                 In glTF coordinates (+Y up), direction d looks up the image at
+#                   column (from the left edge) x = W * (1/2 + atan2(d.z, d.x) / (2 pi))
+#                   row (from the top edge)     y = H * acos(d.y) / pi
+#                 (continuous: pixel i spans [i, i + 1), its centre at i + 1/2; glTF -Z is
+#                 x = W/4, +X the centre, +Z x = 3W/4, the seam at -X; measured, see
+#                 tests/reference/sky/README.md).
+# --sky-rotation DEG  turns the sky by DEG counterclockwise seen from above about +Y:
+#                 L(d) = L_image(R_y(-DEG) d), R_y right-handed about glTF +Y (= Blender +Z): a
+#                 Mapping node (Vector) of rotation (0, 0, -DEG) on the world's Generated
+#                 coordinate. Default 0.
+# --sky-intensity S   multiplies the image's radiance (Background strength). Default 1.
+# --sky-interpolation  the Environment Texture's lookup: Linear (default: bilinear between
+#                 pixel centres, wrapping across the seam in x) or Closest.
 #
 # Lessons from Debian's Blender 3.4 (issue 6):
 # - it has no denoiser but enables denoising by default: turn it off;
@@ -22,6 +48,7 @@
 #   Diffuse BSDF (roughness 0: Lambert) with the same base colour, as voxlight models them.
 import argparse
 import json
+import math
 import os
 import resource
 import sys
@@ -47,7 +74,25 @@ def parse_args():
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--no-lightmap", action="store_true")
     p.add_argument("--no-image", action="store_true")
-    return p.parse_args(argv)
+    p.add_argument("--mask", action="store_true")
+    sky = p.add_mutually_exclusive_group()
+    sky.add_argument("--sky", type=rgb, default=None, metavar="R,G,B")
+    sky.add_argument("--sky-image", default=None, metavar="PATH")
+    p.add_argument("--sky-rotation", type=float, default=0.0, metavar="DEG")
+    p.add_argument("--sky-intensity", type=float, default=1.0, metavar="S")
+    p.add_argument("--sky-interpolation", choices=("Linear", "Closest"), default="Linear")
+    args = p.parse_args(argv)
+    if args.sky_image is None and (args.sky_rotation != 0.0 or args.sky_intensity != 1.0
+                                   or args.sky_interpolation != "Linear"):
+        p.error("--sky-rotation, --sky-intensity and --sky-interpolation need --sky-image")
+    return args
+
+
+def rgb(text):
+    values = [float(v) for v in text.split(",")]
+    if len(values) != 3:
+        raise argparse.ArgumentTypeError("expected R,G,B")
+    return tuple(values)
 
 
 def set_if(obj, name, value):
@@ -74,17 +119,45 @@ def configure(scene, args):
     set_if(c, "filter_width", 1.0)
     scene.view_settings.view_transform = "Standard"
     scene.render.threads_mode = "AUTO"
-    world = bpy.data.worlds.new("black")
-    world.use_nodes = True
-    background = world.node_tree.nodes.get("Background")
-    if background is not None:
-        background.inputs[0].default_value = (0.0, 0.0, 0.0, 1.0)
-        background.inputs[1].default_value = 0.0
-    scene.world = world
+    scene.world = make_world(args)
     settings = scene.render.image_settings
     settings.file_format = "OPEN_EXR"
     settings.color_depth = "32"
     settings.color_mode = "RGB"
+
+
+def make_world(args):
+    """The black world of the references, or the sky that --sky / --sky-image ask for."""
+    sky = getattr(args, "sky", None)
+    sky_image = getattr(args, "sky_image", None)
+    world = bpy.data.worlds.new("sky" if sky or sky_image else "black")
+    world.use_nodes = True
+    nodes, links = world.node_tree.nodes, world.node_tree.links
+    background = nodes.get("Background")
+    if sky_image is None:
+        color, strength = ((0.0, 0.0, 0.0), 0.0) if sky is None else (sky, 1.0)
+        background.inputs["Color"].default_value = (color[0], color[1], color[2], 1.0)
+        background.inputs["Strength"].default_value = strength
+        return world
+    image = bpy.data.images.load(os.path.abspath(sky_image), check_existing=False)
+    image.colorspace_settings.name = "Non-Color"  # the EXR's values as they are: radiance
+    coordinates = nodes.new("ShaderNodeTexCoord")
+    mapping = nodes.new("ShaderNodeMapping")
+    mapping.vector_type = "VECTOR"
+    # L(d) = L_image(R(-theta) d): the lookup turns the direction back by theta about
+    # Blender's +Z, which is glTF's +Y.
+    mapping.inputs["Rotation"].default_value = (0.0, 0.0, -math.radians(getattr(args, "sky_rotation", 0.0)))
+    texture = nodes.new("ShaderNodeTexEnvironment")
+    texture.image = image
+    texture.projection = "EQUIRECTANGULAR"
+    texture.interpolation = getattr(args, "sky_interpolation", "Linear")
+    links.new(coordinates.outputs["Generated"], mapping.inputs["Vector"])
+    links.new(mapping.outputs["Vector"], texture.inputs["Vector"])
+    links.new(texture.outputs["Color"], background.inputs["Color"])
+    background.inputs["Strength"].default_value = getattr(args, "sky_intensity", 1.0)
+    world.cycles.sampling_method = "MANUAL"  # "Sample as light": importance-sampled, with MIS
+    world.cycles.sample_map_resolution = image.size[0]  # a width x width/2 map: the image's own
+    return world
 
 
 def emits(material):
@@ -158,10 +231,28 @@ def bake_lightmap(scene, args, timings):
     bake.margin = 0
     bake.target = "IMAGE_TEXTURES"
     for name, passes in (("lightmap", {"DIRECT", "INDIRECT"}), ("lightmap_direct", {"DIRECT"})):
+        mask = args.mask and name == "lightmap"
+        if mask:  # texels the bake leaves alone keep the sentinel
+            image.pixels.foreach_set(numpy.full(len(image.pixels), -1.0, dtype=numpy.float32))
         start, cpu = time.perf_counter(), time.process_time()
-        bpy.ops.object.bake(type="DIFFUSE", pass_filter=passes, use_clear=True, margin=0)
+        bpy.ops.object.bake(type="DIFFUSE", pass_filter=passes, use_clear=not mask, margin=0)
         timings[name + "_seconds"] = time.perf_counter() - start
         timings[name + "_cpu_seconds"] = time.process_time() - cpu
+        if mask:
+            pixels = numpy.empty(len(image.pixels), dtype=numpy.float32)
+            image.pixels.foreach_get(pixels)
+            pixels = pixels.reshape(-1, 4)
+            covered = pixels[:, 0] != -1.0
+            pixels[~covered, :3] = 0.0
+            pixels[:, 3] = 1.0
+            image.pixels.foreach_set(pixels.ravel())
+            image.save_render(os.path.join(args.out, name + ".exr"), scene=scene)
+            timings["lightmap_covered_texels"] = int(covered.sum())
+            ones = numpy.repeat(covered.astype(numpy.float32), 4).reshape(-1, 4)
+            ones[:, 3] = 1.0
+            image.pixels.foreach_set(ones.ravel())
+            image.save_render(os.path.join(args.out, "lightmap_mask.exr"), scene=scene)
+            continue
         image.save_render(os.path.join(args.out, name + ".exr"), scene=scene)
 
 
@@ -184,7 +275,12 @@ def main():
     args = parse_args()
     os.makedirs(args.out, exist_ok=True)
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    timings = {"spp": args.spp, "blender": bpy.app.version_string}
+    timings = {"spp": args.spp, "seed": args.seed, "blender": bpy.app.version_string}
+    if args.sky is not None:
+        timings["sky"] = list(args.sky)
+    if args.sky_image is not None:
+        timings["sky_image"] = {"path": args.sky_image, "rotation_degrees": args.sky_rotation,
+                                "intensity": args.sky_intensity, "interpolation": args.sky_interpolation}
     start = time.perf_counter()
     bpy.ops.import_scene.gltf(filepath=args.scene)
     timings["import_seconds"] = time.perf_counter() - start
@@ -204,4 +300,5 @@ def main():
     os.replace(os.path.join(args.out, "cycles.json.tmp"), os.path.join(args.out, "cycles.json"))
 
 
-main()
+if __name__ == "__main__":
+    main()
