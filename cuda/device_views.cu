@@ -58,6 +58,8 @@ IrradianceCacheView uploadCache(DeviceBuffers& owner, const IrradianceCacheView&
     d.irradiance = upload(owner, host.irradiance, host.pointCount);
     d.neighbourBegin = upload(owner, host.neighbourBegin, host.neighbourBegin ? host.pointCount + 1 : 0);
     d.neighbours = upload(owner, host.neighbours, host.neighbourBegin ? host.neighbourBegin[host.pointCount] : 0);
+    d.surfacePlanes = upload(owner, host.surfacePlanes,
+                             host.surfacePlanes && host.occupancy.index ? size_t(host.occupancy.index->activeVoxelCount()) : 0);
     return d;
 }
 

@@ -85,6 +85,23 @@ void runCyclesPoint(const BenchOptions& options, const CyclesPeer& peer, BenchPo
                           " --out " + shellQuote(fs::absolute(dir).string()) + " --spp " + std::to_string(p.spec.spp) +
                           " --lightmap-res " + std::to_string(s.lightmap.width) + " --width " + std::to_string(s.imageWidth) +
                           " --height " + std::to_string(s.imageHeight);
+    // The sky, which glTF does not carry: Cycles' world colour, or its environment texture.
+    const bool uniformSky = maxComponent(s.sky) > 0.0f;
+    if (uniformSky && !s.skyImage.empty())
+        throw SettingsError("the Cycles peer takes a uniform sky or a sky image, not both");
+    if (uniformSky) {
+        std::ostringstream sky;
+        sky.precision(9);
+        sky << " --sky " << s.sky.x << "," << s.sky.y << "," << s.sky.z;
+        command += sky.str();
+    }
+    if (!s.skyImage.empty()) {
+        std::ostringstream sky;
+        sky.precision(9);
+        sky << " --sky-image " << shellQuote(fs::absolute(s.skyImage).string()) << " --sky-rotation " << s.skyRotation
+            << " --sky-intensity " << s.skyIntensity;
+        command += sky.str();
+    }
     if (!s.outputs.lightmaps) command += " --no-lightmap";
     if (!s.outputs.images) command += " --no-image";
     if (!options.base.addedLights.empty())

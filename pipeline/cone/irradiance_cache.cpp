@@ -70,6 +70,14 @@ IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level) : level_(l
         }
     }
     tbb::parallel_sort(sides.begin(), sides.end());
+    // Each voxel's surface plane, through the centroid of its pieces (surfaceOffset, in voxels).
+    surfacePlanes_.resize(n);
+    tbb::parallel_for(size_t(0), n, [&](size_t i) {
+        const vec3 normal = voxels.normal[i];
+        const vec3 offset = voxels.surfaceOffset.size() == n ? voxels.surfaceOffset[i] : vec3(0.0f);
+        const vec3 surface = voxels.centre(i) + offset * float(voxels.voxelSize);
+        surfacePlanes_[i] = vec4(normal, glm::dot(normal, surface));
+    });
     // The voxels' centre, for the points' frames (gatherFrame).
     ivec3 lo(std::numeric_limits<int>::max()), hi(std::numeric_limits<int>::min());
     for (const ivec3& c : voxels.coords) {
@@ -146,7 +154,8 @@ void IrradianceCache::link(const MipView& mips) {
                         for (uint32_t r = cellBegin_[size_t(other)]; r < cellBegin_[size_t(other) + 1]; ++r) {
                             const GatherPoint& to = points_[r];
                             if (!(glm::dot(from.normal, to.normal) > 0.0f)) continue;
-                            if (r != q && !clearPath(occupancy, h, lifted, liftOffSurface(to.position, to.normal, h)))
+                            if (r != q && !clearPath(occupancy, h, lifted, liftOffSurface(to.position, to.normal, h),
+                                                     surfacePlanes_.data()))
                                 continue;
                             perPoint[q].push_back(r);
                         }
@@ -177,6 +186,7 @@ IrradianceCacheView IrradianceCache::view(const MipView& mips) const {
     view.irradiance = irradiance_.data();
     view.neighbourBegin = neighbourBegin_.empty() ? nullptr : neighbourBegin_.data();
     view.neighbours = neighbours_.data();
+    view.surfacePlanes = surfacePlanes_.empty() ? nullptr : surfacePlanes_.data();
     view.pointCount = static_cast<uint32_t>(points_.size());
     view.voxelSize = static_cast<float>(voxelSize_);
     view.level = level_;

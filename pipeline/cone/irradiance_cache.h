@@ -100,6 +100,10 @@ struct IrradianceCacheView {
     uint32_t pointCount = 0;
     float voxelSize = 0.0f;  // h
     int level = 0;           // L
+    // Per level-0 voxel, the plane of its surface (unit normal, n·x at its surface's centroid;
+    // a zero normal where the voxel's normals cancel): what a path must cross to be blocked
+    // by it (clearPath). Null: every solid voxel blocks.
+    const vec4* surfacePlanes = nullptr;
 };
 
 // Floor division of a voxel coordinate by the cell size 2^level.
@@ -130,8 +134,14 @@ VL_HOSTDEV inline bool blocksPath(const MipLevelView& occupancy, IndexLeafCache&
 // Whether the segment a → b (world) crosses no voxel of `occupancy` with α ≥ ½ (a solid
 // wall) besides the voxels holding its ends, sampled at most a voxel apart: consecutive
 // samples then differ by at most a voxel along every axis, so none jumps over a layer of
-// voxels one thick (a wall).
-VL_HOSTDEV inline bool clearPath(const MipLevelView& occupancy, float h, const vec3& a, const vec3& b) {
+// voxels one thick (a wall). With `planes` (IrradianceCacheView::surfacePlanes) a solid voxel
+// blocks only a path whose ends lie on opposite sides of its surface's plane, or on it (and
+// always where its normals cancel): a path along a room's corner runs inside the other
+// wall's voxel layer without crossing that wall, and the receivers within half a voxel of
+// the corner, finding no gather point they could see, fell back to cones and drew a dashed
+// dark line down every corner of a room with thick walls.
+VL_HOSTDEV inline bool clearPath(const MipLevelView& occupancy, float h, const vec3& a, const vec3& b,
+                                 const vec4* planes = nullptr) {
     if (!occupancy.index) return true;
     const vec3 from = a / h, to = b / h;
     const float length = glm::length(to - from);
@@ -146,7 +156,14 @@ VL_HOSTDEV inline bool clearPath(const MipLevelView& occupancy, float h, const v
         const nanovdb::Coord voxel = voxelAt(from + (to - from) * (float(k) / float(steps)));
         if (voxel == last || voxel == first || voxel == final) continue;
         last = voxel;
-        if (blocksPath(occupancy, leaves, voxel)) return false;
+        const int32_t index = leaves.value(*occupancy.index, voxel);
+        if (index < 0 || !(occupancy.texels[size_t(index) * size_t(occupancy.facesPerVoxel)].alpha >= 0.5f)) continue;
+        if (!planes) return false;
+        const vec4 plane = planes[index];
+        const vec3 n(plane);
+        if (!(glm::dot(n, n) > 0.25f)) return false;
+        const float sa = glm::dot(n, a) - plane.w, sb = glm::dot(n, b) - plane.w;
+        if (!((sa > 0.0f && sb > 0.0f) || (sa < 0.0f && sb < 0.0f))) return false;
     }
     return true;
 }
@@ -216,7 +233,8 @@ VL_HOSTDEV inline float visitCachePoints(const IrradianceCacheView& cache, const
                     best = k;
             if (best < 0) break;
             const GatherPoint& q = cache.points[candidate[best]];
-            if (clearPath(cache.occupancy, h, lifted, liftOffSurface(q.position, q.normal, h))) home = candidate[best];
+            if (clearPath(cache.occupancy, h, lifted, liftOffSurface(q.position, q.normal, h), cache.surfacePlanes))
+                home = candidate[best];
             weight[best] = 0.0f;  // tried
         }
     }
@@ -294,6 +312,7 @@ private:
     std::vector<vec3> irradiance_;
     std::vector<ivec3> cellCoords_;  // per cell slot
     std::vector<uint32_t> neighbourBegin_, neighbours_;
+    std::vector<vec4> surfacePlanes_;  // per voxel (IrradianceCacheView::surfacePlanes)
     nanovdb::GridHandle<nanovdb::HostBuffer> cells_;
 };
 
