@@ -222,20 +222,24 @@ VL_HOSTDEV inline vec3 skyIrradiance(const TraceSceneView& s, const BvhView& bvh
         return s.sky.uniform * (kPi * static_cast<float>(seen) / static_cast<float>(strata * strata));
     }
     const float n = static_cast<float>(strata * strata);
-    const auto add = [&](const vec3& d, vec3& sum) {
+    // One direction of either kind: its radiance and the image's pdf there come from one
+    // mapping (a cosine direction) or from the draw itself (an image direction).
+    const auto add = [&](const vec3& d, const SkySeen& seen, vec3& sum) {
         const float cosS = glm::dot(ns, d);
         if (!(cosS > 0.0f) || !open(d)) return;
-        const float pdfs = cosS * kInvPi + (image ? skyImagePdf(s.sky, d) : 0.0f);
-        if (pdfs > 0.0f) sum += skyRadianceAlong(s.sky, d) * (cosS / (n * pdfs));
+        const float pdfs = cosS * kInvPi + seen.imagePdf;
+        if (pdfs > 0.0f) sum += seen.radiance * (cosS / (n * pdfs));
     };
     vec3 sum(0.0f);
     for (int i = 0; i < strata; ++i)
         for (int j = 0; j < strata; ++j) {
-            add(sampleDiffuseDirection(ns, jitteredStratum(seed, 0, strata, i, j, 0x534B59u)), sum);
+            const vec3 d = sampleDiffuseDirection(ns, jitteredStratum(seed, 0, strata, i, j, 0x534B59u));
+            if (glm::dot(ns, d) > 0.0f) add(d, skySeenAlong(s.sky, d), sum);
             if (!image) continue;
             float pdf = 0.0f;
-            const vec3 d = sampleSkyImage(s.sky, jitteredStratum(seed, 1, strata, i, j, 0x534B59u), pdf);
-            if (pdf > 0.0f) add(d, sum);
+            vec2 at;
+            const vec3 drawn = sampleSkyImage(s.sky, jitteredStratum(seed, 1, strata, i, j, 0x534B59u), pdf, &at);
+            if (pdf > 0.0f && glm::dot(ns, drawn) > 0.0f) add(drawn, {skyRadianceAt(s.sky, at), pdf}, sum);
         }
     return isFinite(sum) ? sum : vec3(0.0f);
 }

@@ -55,17 +55,21 @@ struct SkyView {
     }
 };
 
-// Radiance seen along unit direction d.
-VL_HOSTDEV inline vec3 skyRadianceAlong(const SkyView& sky, const vec3& d) {
-    vec3 L = sky.uniform;
-    if (!sky.hasImage()) return L;
-    const vec2 p = sky.imageCoordinates(sky.toImage(d)) - vec2(0.5f);
+// Radiance at continuous image coordinates (column, row), the uniform part included.
+VL_HOSTDEV inline vec3 skyRadianceAt(const SkyView& sky, vec2 coordinates) {
+    const vec2 p = coordinates - vec2(0.5f);
     const float fx = glm::floor(p.x), fy = glm::floor(p.y);
     const int x = int(fx), y = int(fy);
     const float tx = p.x - fx, ty = p.y - fy;
     const vec3 top = (1.0f - tx) * sky.texel(x, y) + tx * sky.texel(x + 1, y);
     const vec3 bottom = (1.0f - tx) * sky.texel(x, y + 1) + tx * sky.texel(x + 1, y + 1);
-    return L + sky.intensity * ((1.0f - ty) * top + ty * bottom);
+    return sky.uniform + sky.intensity * ((1.0f - ty) * top + ty * bottom);
+}
+
+// Radiance seen along unit direction d.
+VL_HOSTDEV inline vec3 skyRadianceAlong(const SkyView& sky, const vec3& d) {
+    if (!sky.hasImage()) return sky.uniform;
+    return skyRadianceAt(sky, sky.imageCoordinates(sky.toImage(d)));
 }
 
 // First index whose inclusive CDF value exceeds u (the last where rounding leaves none).
@@ -83,22 +87,39 @@ VL_HOSTDEV inline int searchCdf(const float* cdf, int n, float u) {
 
 VL_HOSTDEV inline float cdfStep(const float* cdf, int i) { return cdf[i] - (i > 0 ? cdf[i - 1] : 0.0f); }
 
-// The solid-angle pdf with which sampleSkyImage draws unit direction d (0 without tables).
-VL_HOSTDEV inline float skyImagePdf(const SkyView& sky, const vec3& d) {
-    if (!sky.samplable()) return 0.0f;
-    const vec3 e = sky.toImage(d);
-    const float sinTheta = glm::sqrt(glm::max(0.0f, 1.0f - e.y * e.y));
-    if (!(sinTheta > 0.0f)) return 0.0f;
-    const vec2 p = sky.imageCoordinates(e);
-    const int row = glm::clamp(int(p.y), 0, sky.height - 1);
-    const int column = glm::clamp(int(p.x), 0, sky.width - 1);
+// The solid-angle pdf of drawing the image-frame direction at `coordinates`, sin θ its
+// polar sine (0 without tables).
+VL_HOSTDEV inline float skyImagePdfAt(const SkyView& sky, vec2 coordinates, float sinTheta) {
+    if (!sky.samplable() || !(sinTheta > 0.0f)) return 0.0f;
+    const int row = glm::clamp(int(coordinates.y), 0, sky.height - 1);
+    const int column = glm::clamp(int(coordinates.x), 0, sky.width - 1);
     const float pixel = cdfStep(sky.rowCdf, row) * cdfStep(sky.columnCdf + size_t(row) * size_t(sky.width), column);
     return pixel * float(sky.width) * float(sky.height) / (2.0f * kPi * kPi * sinTheta);
 }
 
+// The solid-angle pdf with which sampleSkyImage draws unit direction d (0 without tables).
+VL_HOSTDEV inline float skyImagePdf(const SkyView& sky, const vec3& d) {
+    if (!sky.samplable()) return 0.0f;
+    const vec3 e = sky.toImage(d);
+    return skyImagePdfAt(sky, sky.imageCoordinates(e), glm::sqrt(glm::max(0.0f, 1.0f - e.y * e.y)));
+}
+
+// What the sky shows along unit direction d and the pdf of the image's draws there, from one
+// mapping of d (the receivers' cosine directions need both).
+struct SkySeen {
+    vec3 radiance;
+    float imagePdf;
+};
+VL_HOSTDEV inline SkySeen skySeenAlong(const SkyView& sky, const vec3& d) {
+    if (!sky.hasImage()) return {sky.uniform, 0.0f};
+    const vec3 e = sky.toImage(d);
+    const vec2 c = sky.imageCoordinates(e);
+    return {skyRadianceAt(sky, c), skyImagePdfAt(sky, c, glm::sqrt(glm::max(0.0f, 1.0f - e.y * e.y)))};
+}
+
 // A direction drawn from the image's distribution at u ∈ [0, 1)²; pdf its solid-angle pdf
-// (0: nothing drawn).
-VL_HOSTDEV inline vec3 sampleSkyImage(const SkyView& sky, vec2 u, float& pdf) {
+// (0: nothing drawn); `coordinates`, when given, its image coordinates (for skyRadianceAt).
+VL_HOSTDEV inline vec3 sampleSkyImage(const SkyView& sky, vec2 u, float& pdf, vec2* coordinates = nullptr) {
     pdf = 0.0f;
     if (!sky.samplable()) return vec3(0.0f, 1.0f, 0.0f);
     const int row = searchCdf(sky.rowCdf, sky.height, u.x);
@@ -118,6 +139,7 @@ VL_HOSTDEV inline vec3 sampleSkyImage(const SkyView& sky, vec2 u, float& pdf) {
     if (!(sinTheta > 0.0f)) return vec3(0.0f, 1.0f, 0.0f);
     const vec3 e(sinTheta * glm::cos(phi), glm::cos(theta), sinTheta * glm::sin(phi));
     pdf = rowP * columnP * float(sky.width) * float(sky.height) / (2.0f * kPi * kPi * sinTheta);
+    if (coordinates) *coordinates = vec2(float(column) + fx, float(row) + fy);
     return sky.fromImage(e);
 }
 
