@@ -22,6 +22,7 @@
 #include "trace/trace_scene.h"
 
 #include <catch2/catch.hpp>
+#include <tbb/global_control.h>
 
 #include <cmath>
 #include <filesystem>
@@ -312,4 +313,32 @@ TEST_CASE("Image skies against Cycles: the open Cornell box, turned, and a room 
         }
         if (withImage) CHECK(e.image.relativeRmse < 0.08);
     }
+}
+
+TEST_CASE("A bake under an image sky is the same at 1 and 2 threads", "[bake]") {
+    // The image's draws at the receivers and the gather points, and the camera's sky edges,
+    // are seeded per element.
+    Scene scene = floorUnder(afternoonSky(64, 32), 20.0f);
+    const int white = addLambert(scene, vec3(0.7f));
+    addQuad(scene, "wall", white, vec3(-1, 0, -1), vec3(1, 0, -1), vec3(1, 1, -1), vec3(-1, 1, -1));
+    addQuad(scene, "side", white, vec3(-1, 0, -1), vec3(-1, 1, -1), vec3(-1, 1, 1), vec3(-1, 0, 1));
+    BakeSettings settings = quietSettings();
+    settings.voxel.resolution = 32;
+    settings.lightmap.width = settings.lightmap.height = 32;
+    settings.outputs.images = true;
+    settings.imageWidth = settings.imageHeight = 32;
+    auto run = [&](int threads) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+        Diagnostics diagnostics(false, false);
+        return bake(scene, settings, diagnostics);
+    };
+    const BakeResult one = run(1), two = run(2);
+    REQUIRE(one.lightmaps.size() == 1);
+    REQUIRE(one.images.size() == 1);
+    CHECK(one.lightmaps[0].total.pixels == two.lightmaps[0].total.pixels);
+    CHECK(one.images[0].beauty.pixels == two.images[0].beauty.pixels);
+    CHECK(one.voxels.radiance == two.voxels.radiance);
+    double indirect = 0.0;
+    for (float v : one.lightmaps[0].indirect.pixels) indirect += v;
+    CHECK(indirect > 0.0);  // the image's light did bounce
 }
