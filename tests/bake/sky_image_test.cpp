@@ -241,7 +241,8 @@ const std::string kReferences = "/tests/reference/sky/";
 struct CyclesSky {
     std::string name;     // file stem in tests/reference/sky
     std::string scene;    // glTF
-    float rotation;
+    float rotation;       // of scenes/skies/afternoon.exr
+    vec3 uniform{0.0f};   // instead of the image: a uniform world of this radiance
 };
 
 // The bake's and the path tracer's error and means against a Cycles reference of an image sky.
@@ -264,8 +265,12 @@ AgainstCycles againstCycles(const CyclesSky& sky, bool withImage) {
 
     BakeSettings settings = quietSettings();
     settings.outputs.images = withImage;
-    settings.skyImage = sourceDir() + "/scenes/skies/afternoon.exr";
-    settings.skyRotation = sky.rotation;
+    if (maxComponent(sky.uniform) > 0.0f) {
+        settings.sky = sky.uniform;
+    } else {
+        settings.skyImage = sourceDir() + "/scenes/skies/afternoon.exr";
+        settings.skyRotation = sky.rotation;
+    }
     Diagnostics diagnostics(false, false);
     const BakeResult result = bake(scene, settings, diagnostics);
     REQUIRE(result.lightmaps.size() == 1);
@@ -290,12 +295,14 @@ AgainstCycles againstCycles(const CyclesSky& sky, bool withImage) {
 }  // namespace
 
 TEST_CASE("Image skies against Cycles: the open Cornell box, turned, and a room lit through its window", "[bake]") {
-    // Cycles 4096 spp, tests/reference/sky (README there: how they were made). Measured
-    // (2026-11-27) with the default bake: see the README's "An image sky".
+    // Cycles 4096 spp, tests/reference/sky (README there: how they were made); the room under
+    // a uniform world too. Measured (2026-11-27) with the default bake: see the README's "An
+    // image sky".
     const CyclesSky skies[] = {
         {"cornell_sky_image", sharedDir() + "/reference/cornell_sky.gltf", 0.0f},
         {"cornell_sky_image_rot90", sharedDir() + "/reference/cornell_sky.gltf", 90.0f},
         {"window_room", sourceDir() + "/scenes/window_room.gltf", -45.0f},
+        {"window_room_uniform", sourceDir() + "/scenes/window_room.gltf", 0.0f, vec3(0.6f, 0.75f, 1.0f)},
     };
     for (const CyclesSky& sky : skies) {
         if (sky.scene.find("/../shared/") != std::string::npos && !haveShared()) continue;
