@@ -73,6 +73,20 @@ Image readImage(const std::string& path) {
     return image;
 }
 
+Image readLinearImage(const std::string& path) {
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) throw InputError("cannot read image " + path + ": " + OIIO::geterror());
+    const OIIO::ImageSpec& spec = in->spec();
+    Image image(spec.width, spec.height, spec.nchannels);
+    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
+        throw InputError("cannot read image " + path + ": " + in->geterror());
+    if (spec.format.is_floating_point()) return image;
+    const int colourChannels = std::min(spec.nchannels, 3);  // alpha stays as stored
+    for (size_t k = 0; k < image.pixels.size(); ++k)
+        if (int(k % size_t(spec.nchannels)) < colourChannels) image.pixels[k] = srgbToLinear(image.pixels[k]);
+    return image;
+}
+
 std::vector<uint8_t> encodePng8(int width, int height, int channels, const std::vector<uint8_t>& texels) {
     if (width <= 0 || height <= 0 || channels < 1 || channels > 4 ||
         texels.size() != static_cast<size_t>(width) * static_cast<size_t>(height) * static_cast<size_t>(channels))

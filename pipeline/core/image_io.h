@@ -16,6 +16,9 @@ void writeExr(const Image& image, const std::string& path, const std::vector<std
 void writePngSrgb(const Image& image, const std::string& path);
 // Any format OpenImageIO reads, as float. 8-bit files are returned as stored (no decoding).
 Image readImage(const std::string& path);
+// The same, as linear light: float files (EXR, HDR) as stored, integer ones (PNG, JPEG, 8- or
+// 16-bit TIFF) decoded from sRGB as Blender reads them; alpha as stored.
+Image readLinearImage(const std::string& path);
 // An 8-bit PNG, in memory, of `texels` (`channels` per pixel, rows from the top) exactly as
 // given: no sRGB curve, alpha not associated (an encoding that keeps colour under a small
 // alpha, RGBM, needs both). Error when it cannot be encoded.

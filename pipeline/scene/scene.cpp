@@ -55,7 +55,7 @@ vec3 Sky::meanRadiance() const {
 }
 
 std::shared_ptr<const SkyImage> loadSkyImage(const std::string& path) {
-    const Image image = readImage(path);
+    const Image image = readLinearImage(path);
     if (image.width < 2 || image.height < 1 || image.channels < 1)
         throw InputError(path + ": a sky image needs at least 2 x 1 pixels, not " + std::to_string(image.width) + " x " +
                          std::to_string(image.height));

@@ -141,7 +141,8 @@ struct Sky {
     vec3 meanRadiance() const;
 };
 
-// The image at `path` (.hdr, .exr or anything OpenImageIO reads) as a sky: InputError naming
+// The image at `path` (.hdr, .exr or anything OpenImageIO reads; 8- and 16-bit files decoded
+// from sRGB, as Blender reads them) as a sky: InputError naming
 // the file and the pixel for a missing or unreadable file, fewer than three channels' worth
 // of colour (one channel is grey), or a negative or non-finite value.
 std::shared_ptr<const SkyImage> loadSkyImage(const std::string& path);

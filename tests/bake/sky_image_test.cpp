@@ -232,6 +232,12 @@ TEST_CASE("A job file's sky image: its path is the job file's, its rotation and 
     settings.skyImage = (dir / "negative.exr").string();
     CHECK_THROWS_WITH(bake(scene, settings, diagnostics),
                       Catch::Contains("negative.exr") && Catch::Contains("pixel (3, 1)") && Catch::Contains("negative"));
+
+    // An 8-bit sky is sRGB-encoded, as Blender reads it: linear 0.5 stored as 188 comes back 0.5.
+    writePngSrgb(Image(8, 4, 3, 0.5f), (dir / "ldr.png").string());
+    const std::shared_ptr<const SkyImage> ldr = loadSkyImage((dir / "ldr.png").string());
+    REQUIRE(ldr->texels.size() == 32);
+    CHECK(ldr->texels[5].x == Approx(0.5f).margin(0.005f));
 }
 
 namespace {
