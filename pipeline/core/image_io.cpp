@@ -63,29 +63,37 @@ void writePngSrgb(const Image& image, const std::string& path) {
     writeWith(path, spec, bytes.data());
 }
 
-Image readImage(const std::string& path) {
+namespace {
+
+// The file's pixels as float; `storedAsFloat` says whether the file held floats.
+Image readFloats(const std::string& path, bool& storedAsFloat) {
     auto in = OIIO::ImageInput::open(path);
     if (!in) throw InputError("cannot read image " + path + ": " + OIIO::geterror());
     const OIIO::ImageSpec& spec = in->spec();
     Image image(spec.width, spec.height, spec.nchannels);
     if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
         throw InputError("cannot read image " + path + ": " + in->geterror());
+    storedAsFloat = spec.format.is_floating_point();
     return image;
 }
 
+}  // namespace
+
+Image readImage(const std::string& path) {
+    bool storedAsFloat = false;
+    return readFloats(path, storedAsFloat);
+}
+
 Image readLinearImage(const std::string& path) {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) throw InputError("cannot read image " + path + ": " + OIIO::geterror());
-    const OIIO::ImageSpec& spec = in->spec();
-    Image image(spec.width, spec.height, spec.nchannels);
-    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
-        throw InputError("cannot read image " + path + ": " + in->geterror());
-    if (spec.format.is_floating_point()) return image;
-    const int colourChannels = std::min(spec.nchannels, 3);  // alpha stays as stored
+    bool storedAsFloat = false;
+    Image image = readFloats(path, storedAsFloat);
+    if (storedAsFloat) return image;
+    const int colourChannels = std::min(image.channels, 3);  // alpha stays as stored
     for (size_t k = 0; k < image.pixels.size(); ++k)
-        if (int(k % size_t(spec.nchannels)) < colourChannels) image.pixels[k] = srgbToLinear(image.pixels[k]);
+        if (int(k % size_t(image.channels)) < colourChannels) image.pixels[k] = srgbToLinear(image.pixels[k]);
     return image;
 }
+
 
 std::vector<uint8_t> encodePng8(int width, int height, int channels, const std::vector<uint8_t>& texels) {
     if (width <= 0 || height <= 0 || channels < 1 || channels > 4 ||

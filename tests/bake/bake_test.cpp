@@ -366,12 +366,7 @@ TEST_CASE("A bake is the same at 1 and 2 threads", "[bake]") {
     settings.voxel.resolution = 32;
     settings.lightmap.width = settings.lightmap.height = 16;
     settings.lightmap.atlasPerMesh = true;
-    auto run = [&](int threads) {
-        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-        Diagnostics diagnostics(false, false);
-        return bake(scene, settings, diagnostics);
-    };
-    const BakeResult one = run(1), two = run(2);
+    const BakeResult one = bakeOnThreads(scene, settings, 1), two = bakeOnThreads(scene, settings, 2);
     REQUIRE(one.lightmaps.size() == two.lightmaps.size());
     for (size_t i = 0; i < one.lightmaps.size(); ++i) CHECK(one.lightmaps[i].total.pixels == two.lightmaps[i].total.pixels);
     CHECK(one.voxels.radiance == two.voxels.radiance);

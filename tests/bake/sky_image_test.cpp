@@ -22,7 +22,6 @@
 #include "trace/trace_scene.h"
 
 #include <catch2/catch.hpp>
-#include <tbb/global_control.h>
 
 #include <cmath>
 #include <filesystem>
@@ -340,12 +339,7 @@ TEST_CASE("A bake under an image sky is the same at 1 and 2 threads", "[bake]") 
     settings.lightmap.width = settings.lightmap.height = 32;
     settings.outputs.images = true;
     settings.imageWidth = settings.imageHeight = 32;
-    auto run = [&](int threads) {
-        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-        Diagnostics diagnostics(false, false);
-        return bake(scene, settings, diagnostics);
-    };
-    const BakeResult one = run(1), two = run(2);
+    const BakeResult one = bakeOnThreads(scene, settings, 1), two = bakeOnThreads(scene, settings, 2);
     REQUIRE(one.lightmaps.size() == 1);
     REQUIRE(one.images.size() == 1);
     CHECK(one.lightmaps[0].total.pixels == two.lightmaps[0].total.pixels);
@@ -354,4 +348,38 @@ TEST_CASE("A bake under an image sky is the same at 1 and 2 threads", "[bake]") 
     double indirect = 0.0;
     for (float v : one.lightmaps[0].indirect.pixels) indirect += v;
     CHECK(indirect > 0.0);  // the image's light did bounce
+}
+
+TEST_CASE("The classroom's lightmap against Cycles: its sky, sun and lamps through generated charts", "[bake]") {
+    // tests/reference/classroom: Cycles 1024 spp of the bake's own scene.glb (its generated
+    // TEXCOORD_1), with the classroom job's sky and sun (README there). Compared where Cycles
+    // wrote light: the 5,294 texels it leaves black are faces pressed against others (the
+    // floor under feet, frame tops under desk tops); there the leg bottoms that look down
+    // through the one-sided floor see our sky's lower half and Cycles' nothing. Measured
+    // (2026-11-27): 13.1%, means +1.7…+2.0%; Cycles' own noise at 1024 spp about 3.9%.
+    const std::string dir = sourceDir() + "/tests/reference/classroom/";
+    const std::vector<BakeJob> jobs = readJobFile(dir + "classroom_baked.json", quietSettings(), tempDir("classroom-cycles"));
+    REQUIRE(jobs.size() == 1);
+    BakeSettings settings = jobs[0].settings;
+    settings.outputs.images = false;
+    Diagnostics diagnostics(false, false);
+    const BakeResult result = bake(loadJobScene(jobs[0]), settings, diagnostics);
+    REQUIRE(result.lightmaps.size() == 1);
+    const Image reference = readImage(dir + "classroom_lightmap_1024spp.exr");
+    Image lit = readImage(dir + "classroom_lightmap_mask.exr");
+    size_t compared = 0;
+    for (int y = 0; y < lit.height; ++y)
+        for (int x = 0; x < lit.width; ++x) {
+            const bool keep = lit.at(x, y) > 0.5f && maxComponent(reference.rgb(x, y)) > 0.0f;
+            for (int c = 0; c < lit.channels; ++c) lit.at(x, y, c) = keep ? 1.0f : 0.0f;
+            compared += keep ? 1 : 0;
+        }
+    REQUIRE(compared > 200000);
+    MetricOptions options;
+    options.mask = &lit;
+    const ErrorMetrics total = compareImages(result.lightmaps[0].total, reference, options);
+    INFO("classroom lightmap " << total.relativeRmse << " over " << compared << " texels; means " << total.meanTest[0]
+                               << " / " << total.meanReference[0]);
+    CHECK(total.relativeRmse < 0.15);
+    for (int c = 0; c < 3; ++c) CHECK(total.meanTest[c] == Approx(total.meanReference[c]).epsilon(0.03));
 }

@@ -21,7 +21,6 @@
 #include "trace/trace_scene.h"
 
 #include <catch2/catch.hpp>
-#include <tbb/global_control.h>
 
 #include <filesystem>
 #include <fstream>
@@ -276,12 +275,7 @@ TEST_CASE("A bake under a sky and a sun with a disk is the same at 1 and 2 threa
     settings.voxel.resolution = 32;
     settings.lightmap.width = settings.lightmap.height = 32;
     settings.sky = kSky;
-    auto run = [&](int threads) {
-        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-        Diagnostics diagnostics(false, false);
-        return bake(scene, settings, diagnostics);
-    };
-    const BakeResult one = run(1), two = run(2);
+    const BakeResult one = bakeOnThreads(scene, settings, 1), two = bakeOnThreads(scene, settings, 2);
     REQUIRE(one.lightmaps.size() == 1);
     REQUIRE(two.lightmaps.size() == 1);
     CHECK(one.lightmaps[0].total.pixels == two.lightmaps[0].total.pixels);

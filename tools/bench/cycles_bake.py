@@ -7,6 +7,8 @@
 #       [--no-lightmap] [--no-image] [--seed 1] [--mask]
 #       [--sky R,G,B | --sky-image PATH [--sky-rotation DEG] [--sky-intensity S]
 #                                       [--sky-interpolation Linear|Closest]]
+#       [--sun DX,DY,DZ --sun-irradiance E [--sun-angle DEG] [--sun-color R,G,B]]
+#       [--one-sided-emitters]
 #
 # Writes DIR/lightmap.exr, DIR/lightmap_direct.exr, DIR/image.exr (linear float) and
 # DIR/cycles.json (seconds of each bake and render, peak memory). Settings as the Cycles
@@ -36,6 +38,28 @@
 # --sky-intensity S   multiplies the image's radiance (Background strength). Default 1.
 # --sky-interpolation  the Environment Texture's lookup: Linear (default: bilinear between
 #                 pixel centres, wrapping across the seam in x) or Closest.
+# --sun DX,DY,DZ  adds a sun (Blender SUN light): a directional light travelling along
+#                 (DX, DY, DZ) in glTF coordinates (+Y up; need not be unit), as a job file's
+#                 directional light "direction". The importer maps glTF (x, y, z) to Blender
+#                 (x, -z, y); the sun's local -Z is turned onto that direction. Write a
+#                 negative first component as --sun=-0.7,-0.55,-0.45 (argparse would read a
+#                 separate "-0.7,..." as an option).
+# --sun-irradiance E  its irradiance in W/m^2 on a surface facing it (Blender's sun strength,
+#                 a job file's directional "intensity"). Needed with --sun.
+# --sun-angle DEG  the sun disk's angular diameter in degrees (Blender's sun angle, a job
+#                 file's "angle"). Default 0: a point-like sun, sharp shadows.
+# --sun-color R,G,B  multiplies the irradiance per channel (a job file's "color"): the sun
+#                 delivers (E R, E G, E B). Default 1,1,1.
+#                 Checked (tests/reference/classroom/README.md): open quads facing +Y, +X, +Z,
+#                 -X under suns along (0,-1,0) and (-0.7,-0.55,-0.45) bake E max(0, n.-d) R/pi
+#                 per channel within 2e-5 on average (0.53 degree disk, 16 spp).
+# --one-sided-emitters  emissive materials that glTF marks single-sided (no doubleSided:
+#                 Blender's importer sets use_backface_culling) emit from their front face
+#                 only, as glTF's culling and voxlight's emitters do; Cycles' emission is
+#                 otherwise two-sided. Such a material becomes Lambert (Diffuse BSDF, roughness
+#                 0, its base colour) on both sides plus its emission (colour x strength) where
+#                 the ray meets the front (Geometry Backfacing = 0). Without the flag emitters
+#                 are left as the importer made them (Principled, emitting from both sides).
 #
 # Lessons from Debian's Blender 3.4 (issue 6):
 # - it has no denoiser but enables denoising by default: turn it off;
@@ -81,7 +105,22 @@ def parse_args():
     p.add_argument("--sky-rotation", type=float, default=0.0, metavar="DEG")
     p.add_argument("--sky-intensity", type=float, default=1.0, metavar="S")
     p.add_argument("--sky-interpolation", choices=("Linear", "Closest"), default="Linear")
+    p.add_argument("--sun", type=rgb, default=None, metavar="DX,DY,DZ")
+    p.add_argument("--sun-irradiance", type=float, default=None, metavar="E")
+    p.add_argument("--sun-angle", type=float, default=0.0, metavar="DEG")
+    p.add_argument("--sun-color", type=rgb, default=(1.0, 1.0, 1.0), metavar="R,G,B")
+    p.add_argument("--one-sided-emitters", action="store_true")
     args = p.parse_args(argv)
+    if args.sun is None and (args.sun_irradiance is not None or args.sun_angle != 0.0
+                             or args.sun_color != (1.0, 1.0, 1.0)):
+        p.error("--sun-irradiance, --sun-angle and --sun-color need --sun")
+    if args.sun is not None:
+        if args.sun_irradiance is None or not args.sun_irradiance >= 0.0:
+            p.error("--sun needs --sun-irradiance E >= 0")
+        if not 0.0 <= args.sun_angle <= 180.0:
+            p.error("--sun-angle must lie in [0, 180] degrees")
+        if sum(v * v for v in args.sun) == 0.0:
+            p.error("--sun direction is zero")
     if args.sky_image is None and (args.sky_rotation != 0.0 or args.sky_intensity != 1.0
                                    or args.sky_interpolation != "Linear"):
         p.error("--sky-rotation, --sky-intensity and --sky-interpolation need --sky-image")
@@ -158,6 +197,57 @@ def make_world(args):
     world.cycles.sampling_method = "MANUAL"  # "Sample as light": importance-sampled, with MIS
     world.cycles.sample_map_resolution = image.size[0]  # a width x width/2 map: the image's own
     return world
+
+
+def add_sun(scene, args):
+    """A Blender SUN of strength E (W/m^2 on a facing surface) shining along the glTF direction."""
+    import mathutils
+    dx, dy, dz = args.sun
+    travel = mathutils.Vector((dx, -dz, dy)).normalized()  # glTF (x, y, z) -> Blender (x, -z, y)
+    light = bpy.data.lights.new("sun", type="SUN")
+    light.energy = args.sun_irradiance
+    light.color = args.sun_color
+    light.angle = math.radians(args.sun_angle)
+    obj = bpy.data.objects.new("sun", light)
+    obj.rotation_mode = "QUATERNION"
+    obj.rotation_quaternion = (-travel).to_track_quat("Z", "Y")  # local +Z towards the sun: it shines along -Z
+    scene.collection.objects.link(obj)
+    return list(obj.rotation_quaternion @ mathutils.Vector((0.0, 0.0, -1.0)))  # Blender axes
+
+
+def make_one_sided_emitter(material):
+    """Front-only emission, Lambert reflection on both sides (see --one-sided-emitters)."""
+    if material is None or not material.use_nodes or not emits(material) or not material.use_backface_culling:
+        return False
+    nodes, links = material.node_tree.nodes, material.node_tree.links
+    principled = next((n for n in nodes if n.type == "BSDF_PRINCIPLED"), None)
+    output = next((n for n in nodes if n.type == "OUTPUT_MATERIAL"), None)
+    if principled is None or output is None:
+        raise SystemExit("cycles_bake.py: --one-sided-emitters: material %r is not a Principled BSDF" % material.name)
+    diffuse = nodes.new("ShaderNodeBsdfDiffuse")
+    diffuse.inputs["Roughness"].default_value = 0.0
+    emission = nodes.new("ShaderNodeEmission")
+    for source, target in ((principled.inputs["Base Color"], diffuse.inputs["Color"]),
+                           (principled.inputs["Emission"], emission.inputs["Color"])):
+        if source.is_linked:
+            links.new(source.links[0].from_socket, target)
+        else:
+            target.default_value = source.default_value
+    strength = principled.inputs["Emission Strength"]
+    if strength.is_linked:
+        links.new(strength.links[0].from_socket, emission.inputs["Strength"])
+    else:
+        emission.inputs["Strength"].default_value = strength.default_value
+    front = nodes.new("ShaderNodeAddShader")
+    links.new(diffuse.outputs["BSDF"], front.inputs[0])
+    links.new(emission.outputs["Emission"], front.inputs[1])
+    geometry = nodes.new("ShaderNodeNewGeometry")
+    mix = nodes.new("ShaderNodeMixShader")  # Fac 0 (front): input 1; Fac 1 (back): input 2
+    links.new(geometry.outputs["Backfacing"], mix.inputs["Fac"])
+    links.new(front.outputs["Shader"], mix.inputs[1])
+    links.new(diffuse.outputs["BSDF"], mix.inputs[2])
+    links.new(mix.outputs["Shader"], output.inputs["Surface"])
+    return True
 
 
 def emits(material):
@@ -287,6 +377,12 @@ def main():
     scene = bpy.context.scene
     configure(scene, args)
     timings["lambert_materials"] = sorted(m.name for m in bpy.data.materials if make_lambert(m))
+    if args.one_sided_emitters:
+        timings["one_sided_emitters"] = sorted(m.name for m in bpy.data.materials if make_one_sided_emitter(m))
+    if args.sun is not None:
+        timings["sun"] = {"direction_gltf": list(args.sun), "irradiance": args.sun_irradiance,
+                          "angle_degrees": args.sun_angle, "color": list(args.sun_color),
+                          "direction_blender": add_sun(scene, args)}
     if not args.no_lightmap:
         bake_lightmap(scene, args, timings)
     if not args.no_image:
