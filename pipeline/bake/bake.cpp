@@ -237,7 +237,8 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
     FaceTransport bounceTransport;  // the bounces' rays, traced once
     const TransportBuilder bounceRays = [&](const std::vector<GatherPoint>& points,
                                             const MipView& mips) -> const FaceTransport& {
-        bounceTransport = rayTransport(points, mips, result.voxels.size(), bvhView, sceneView, settings.bounceRays);
+        bounceTransport = rayTransport(points, mips, result.voxels.size(), bvhView, sceneView, settings.bounceRays,
+                                       settings.direct.skyStrata);
         return bounceTransport;
     };
 
@@ -246,11 +247,16 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
     sky.openness = [&](const std::vector<GatherPoint>& points) {
         return skyOpenness(points, static_cast<float>(result.voxels.voxelSize), bvhView, sceneView, settings.bounceRays);
     };
-    if (sceneView.sky.hasImage())
+    if (sceneView.sky.hasImage()) {
         sky.irradiance = [&](const std::vector<GatherPoint>& points) {
             return skyIrradianceAtPoints(points, static_cast<float>(result.voxels.voxelSize), bvhView, sceneView,
                                          settings.direct.skyStrata);
         };
+        sky.imageDraws = [&](const std::vector<GatherPoint>& points) {
+            return skyImageDrawsAtPoints(points, static_cast<float>(result.voxels.voxelSize), bvhView, sceneView,
+                                         settings.direct.skyStrata, settings.bounceRays);
+        };
+    }
 
     timed(result.stages, "bounces", [&] {
         Progress progress("bounces", uint64_t(settings.bounces) * result.voxels.size(), settings.quiet);

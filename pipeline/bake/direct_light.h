@@ -193,54 +193,68 @@ VL_HOSTDEV inline vec3 emitterQuadIrradiance(const TraceSceneView& s, const BvhV
     return wholly * (sampledVisible / sampled);
 }
 
+// One open direction's share of an image sky's irradiance when `cosineRays` cosine-weighted
+// directions and `imageDraws` draws from the image both look for it (the balance heuristic):
+// L(d)·cos θ / (N_cos·p_cos(d) + N_image·p_image(d)).
+VL_HOSTDEV inline vec3 skyShare(const SkySeen& seen, float cosTheta, float cosineRays, float imageDraws) {
+    const float pdfs = cosineRays * cosTheta * kInvPi + imageDraws * seen.imagePdf;
+    return pdfs > 0.0f ? seen.radiance * (cosTheta / pdfs) : vec3(0.0f);
+}
+
+// Whether the sky is seen from p along d: above the geometric surface and unblocked.
+VL_HOSTDEV inline bool skyOpenAlong(const BvhView& bvh, const vec3& p, const vec3& ng, const vec3& d) {
+    if (!(glm::dot(d, ng) > 0.0f)) return false;
+    Ray ray;
+    ray.direction = d;
+    ray.origin = offsetRayOrigin(p, ng, bvh.extent);
+    return !intersectAny(bvh, ray);
+}
+
+// The image draws' part of an image sky's irradiance at p: drawsPerAxis² stratified draws
+// (seeded by `seed`), each open one adding its share against `cosineRays` cosine directions
+// that look for the sky beside them.
+VL_HOSTDEV inline vec3 skyImageDrawsIrradiance(const TraceSceneView& s, const BvhView& bvh, const vec3& p,
+                                               const vec3& ng, const vec3& ns, int drawsPerAxis, float cosineRays,
+                                               uint64_t seed) {
+    if (!s.sky.samplable()) return vec3(0.0f);
+    const float draws = static_cast<float>(drawsPerAxis * drawsPerAxis);
+    vec3 sum(0.0f);
+    for (int i = 0; i < drawsPerAxis; ++i)
+        for (int j = 0; j < drawsPerAxis; ++j) {
+            float pdf = 0.0f;
+            vec2 at;
+            const vec3 d = sampleSkyImage(s.sky, jitteredStratum(seed, 1, drawsPerAxis, i, j, 0x534B59u), pdf, &at);
+            const float cosTheta = glm::dot(ns, d);
+            if (pdf > 0.0f && cosTheta > 0.0f && skyOpenAlong(bvh, p, ng, d))
+                sum += skyShare({skyRadianceAt(s.sky, at), pdf}, cosTheta, cosineRays, draws);
+        }
+    return sum;
+}
+
 // Irradiance from the sky at a receiver. A uniform sky: π·L_sky times the share of m × m
 // stratified cosine-weighted directions about ns (each jittered by its own generator, seed
 // and stratum) that leave the scene, above the geometric surface too. The sky is seen in
 // every direction nothing blocks, so unlike an emitter there is no closed form to scale:
 // this is the plain stratified estimate, exact where the whole hemisphere is open (a floor
 // under the sky) or closed. An image sky adds m × m stratified draws from the image
-// (sky.h), and both sets count by the balance heuristic: each open direction adds
-// L(d)·cos θ / (m²·(p_cos(d) + p_image(d))). A small bright sun in the image is found by its
-// own draws, which cosine directions alone would miss or hit by chance.
+// (sky.h), and both sets count by the balance heuristic (skyShare). A small bright sun in
+// the image is found by its own draws, which cosine directions alone would miss or hit by
+// chance.
 VL_HOSTDEV inline vec3 skyIrradiance(const TraceSceneView& s, const BvhView& bvh, const vec3& p, const vec3& ng,
                                      const vec3& ns, int strata, uint64_t seed) {
     if (!s.sky.present()) return vec3(0.0f);
-    const bool image = s.sky.samplable();
-    const auto open = [&](const vec3& d) {
-        if (!(glm::dot(d, ng) > 0.0f)) return false;
-        Ray ray;
-        ray.direction = d;
-        ray.origin = offsetRayOrigin(p, ng, bvh.extent);
-        return !intersectAny(bvh, ray);
-    };
-    if (!image && !s.sky.hasImage()) {
-        int seen = 0;
-        for (int i = 0; i < strata; ++i)
-            for (int j = 0; j < strata; ++j)
-                if (open(sampleDiffuseDirection(ns, jitteredStratum(seed, 0, strata, i, j, 0x534B59u))))  // "SKY"
-                    ++seen;
-        return s.sky.uniform * (kPi * static_cast<float>(seen) / static_cast<float>(strata * strata));
-    }
     const float n = static_cast<float>(strata * strata);
-    // One direction of either kind: its radiance and the image's pdf there come from one
-    // mapping (a cosine direction) or from the draw itself (an image direction).
-    const auto add = [&](const vec3& d, const SkySeen& seen, vec3& sum) {
-        const float cosS = glm::dot(ns, d);
-        if (!(cosS > 0.0f) || !open(d)) return;
-        const float pdfs = cosS * kInvPi + seen.imagePdf;
-        if (pdfs > 0.0f) sum += seen.radiance * (cosS / (n * pdfs));
-    };
+    int seen = 0;
     vec3 sum(0.0f);
     for (int i = 0; i < strata; ++i)
         for (int j = 0; j < strata; ++j) {
-            const vec3 d = sampleDiffuseDirection(ns, jitteredStratum(seed, 0, strata, i, j, 0x534B59u));
-            if (glm::dot(ns, d) > 0.0f) add(d, skySeenAlong(s.sky, d), sum);
-            if (!image) continue;
-            float pdf = 0.0f;
-            vec2 at;
-            const vec3 drawn = sampleSkyImage(s.sky, jitteredStratum(seed, 1, strata, i, j, 0x534B59u), pdf, &at);
-            if (pdf > 0.0f && glm::dot(ns, drawn) > 0.0f) add(drawn, {skyRadianceAt(s.sky, at), pdf}, sum);
+            const vec3 d = sampleDiffuseDirection(ns, jitteredStratum(seed, 0, strata, i, j, 0x534B59u));  // "SKY"
+            if (!skyOpenAlong(bvh, p, ng, d)) continue;
+            ++seen;
+            if (s.sky.hasImage()) sum += skyShare(skySeenAlong(s.sky, d), glm::dot(ns, d), n, s.sky.samplable() ? n : 0.0f);
         }
+    if (!s.sky.hasImage()) return s.sky.uniform * (kPi * static_cast<float>(seen) / n);
+    sum += skyImageDrawsIrradiance(s, bvh, p, ng, ns, strata, n, seed);
     return isFinite(sum) ? sum : vec3(0.0f);
 }
 

@@ -81,16 +81,25 @@ std::vector<vec3> fanPattern(int n) {
     return pattern;
 }
 
-// Traces the fan's rays in `pattern` and calls hit(ray, closest hit) for each that hits.
-template <typename OnHit>
-void traceFan(const RayFan& fan, const std::vector<vec3>& pattern, const BvhView& bvh, OnHit&& onHit) {
+// Traces the fan's rays in `pattern` and calls onHit(ray, closest hit) for each that hits,
+// onEscape(ray) for each that leaves the scene.
+template <typename OnEscape, typename OnHit>
+void traceFan(const RayFan& fan, const std::vector<vec3>& pattern, const BvhView& bvh, OnEscape&& onEscape, OnHit&& onHit) {
     for (const vec3& d : pattern) {
         Ray ray;
         ray.origin = fan.origin;
         ray.direction = glm::normalize(d.x * fan.tangent + d.y * fan.bitangent + d.z * fan.normal);
         Hit hit;
-        if (intersectClosest(bvh, ray, hit)) onHit(ray, hit);
+        if (intersectClosest(bvh, ray, hit))
+            onHit(ray, hit);
+        else
+            onEscape(ray);
     }
+}
+
+template <typename OnHit>
+void traceFan(const RayFan& fan, const std::vector<vec3>& pattern, const BvhView& bvh, OnHit&& onHit) {
+    traceFan(fan, pattern, bvh, [](const Ray&) {}, onHit);
 }
 
 // Level 0's index and, per voxel, the coverage of its six texels side by side: what a ray
@@ -252,7 +261,8 @@ std::vector<vec3> gatherByRays(const std::vector<GatherPoint>& points, const Mip
 }
 
 FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView& mips, size_t voxelCount,
-                           const BvhView& bvh, const TraceSceneView& scene, int raysPerAxis, Progress* progress) {
+                           const BvhView& bvh, const TraceSceneView& scene, int raysPerAxis, int skyDrawsPerAxis,
+                           Progress* progress) {
     checkRays(raysPerAxis);
     FaceTransport transport;
     transport.begin.assign(points.size() + 1, 0);
@@ -267,7 +277,11 @@ FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView
         std::vector<uint32_t> count;  // entries per point of the chunk
         std::vector<FaceTransport::Entry> entries;
         std::vector<float> open;      // per point of the chunk
+        std::vector<vec3> skyCosine;  // per point of the chunk, under an image sky
     };
+    const bool imageSky = scene.sky.hasImage() && skyDrawsPerAxis > 0;
+    const float cosineRays = float(pattern.size());
+    const float imageDraws = scene.sky.samplable() ? float(skyDrawsPerAxis * skyDrawsPerAxis) : 0.0f;
     // Many rays of a point read the same face: each thread sums a point's weights per face in
     // a dense scratch array (summed in ray order, whichever thread it is), then lists the
     // faces read in order and clears them.
@@ -287,7 +301,14 @@ FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView
         const size_t first = c * kChunkPoints, last = std::min(points.size(), first + kChunkPoints);
         for (size_t q = first; q < last; ++q) {
             size_t hits = 0;
-            traceFan(rayFan(points[q], h, bvh, scene), pattern, bvh, [&](const Ray& ray, const Hit& hit) {
+            const RayFan fan = rayFan(points[q], h, bvh, scene);
+            vec3 sky(0.0f);
+            const auto escaped = [&](const Ray& ray) {
+                if (imageSky)
+                    sky += skyShare(skySeenAlong(scene.sky, ray.direction), glm::dot(fan.normal, ray.direction), cosineRays,
+                                    imageDraws);
+            };
+            traceFan(fan, pattern, bvh, escaped, [&](const Ray& ray, const Hit& hit) {
                 ++hits;
                 readHitTexels(level0, leaves, ray, hit, windingCross(scene, hit.triangle),
                               [&](int32_t voxel, int travel, float weight) {
@@ -304,6 +325,7 @@ FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView
             }
             part.count.push_back(static_cast<uint32_t>(scratch.read.size()));
             part.open.push_back(rayWeight * static_cast<float>(pattern.size() - hits));
+            if (imageSky) part.skyCosine.push_back(sky);
             scratch.read.clear();
         }
         if (progress) progress->advance(last - first);
@@ -313,6 +335,7 @@ FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView
     for (const Chunk& part : parts) {
         transport.entries.insert(transport.entries.end(), part.entries.begin(), part.entries.end());
         transport.open.insert(transport.open.end(), part.open.begin(), part.open.end());
+        transport.skyCosine.insert(transport.skyCosine.end(), part.skyCosine.begin(), part.skyCosine.end());
         for (uint32_t count : part.count) {
             transport.begin[q + 1] = transport.begin[q] + count;
             ++q;
@@ -341,6 +364,18 @@ std::vector<vec3> skyIrradianceAtPoints(const std::vector<GatherPoint>& points, 
     tbb::parallel_for(size_t(0), points.size(), [&](size_t q) {
         const RayFan fan = rayFan(points[q], voxelSize, bvh, scene);
         irradiance[q] = skyIrradiance(scene, bvh, fan.origin, fan.normal, fan.normal, strata, uint64_t(q));
+    });
+    return irradiance;
+}
+
+std::vector<vec3> skyImageDrawsAtPoints(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
+                                        const TraceSceneView& scene, int drawsPerAxis, int raysPerAxis) {
+    std::vector<vec3> irradiance(points.size());
+    const float cosineRays = float(raysPerAxis * raysPerAxis);
+    tbb::parallel_for(size_t(0), points.size(), [&](size_t q) {
+        const RayFan fan = rayFan(points[q], voxelSize, bvh, scene);
+        irradiance[q] = skyImageDrawsIrradiance(scene, bvh, fan.origin, fan.normal, fan.normal, drawsPerAxis, cosineRays,
+                                                uint64_t(q));
     });
     return irradiance;
 }

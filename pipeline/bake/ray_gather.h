@@ -77,9 +77,11 @@ std::vector<vec3> gatherByRays(const std::vector<GatherPoint>& points, const Mip
 // change while the light does, so the bounces trace once and apply the map at every bounce.
 // Applied to faces it gives gatherByRays with the same faces, up to the order of summing.
 // TBB-parallel over points; the same bytes at any thread count. `progress` advances once per
-// point. `voxelCount`: the voxels of `mips` (faceRadiance's size).
+// point. `voxelCount`: the voxels of `mips` (faceRadiance's size). Under an image sky
+// (scene.sky) with `skyDrawsPerAxis` > 0 the rays that leave the scene also give
+// FaceTransport::skyCosine, to join skyImageDrawsAtPoints' draws.
 FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView& mips, size_t voxelCount,
-                           const BvhView& bvh, const TraceSceneView& scene, int raysPerAxis,
+                           const BvhView& bvh, const TraceSceneView& scene, int raysPerAxis, int skyDrawsPerAxis = 0,
                            Progress* progress = nullptr);
 
 // Per point, the weight of its rays (raysPerAxis² as gatherByRays sends them) that leave the
@@ -94,6 +96,11 @@ std::vector<float> skyOpenness(const std::vector<GatherPoint>& points, float vox
 // radiance times an openness.
 std::vector<vec3> skyIrradianceAtPoints(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
                                         const TraceSceneView& scene, int strata);
+// Only its image draws' part (bake/direct_light.h skyImageDrawsIrradiance: `drawsPerAxis`²
+// draws against `raysPerAxis`² cosine rays), for the bounces when a FaceTransport's rays give
+// the rest (FaceTransport::skyCosine).
+std::vector<vec3> skyImageDrawsAtPoints(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
+                                        const TraceSceneView& scene, int drawsPerAxis, int raysPerAxis);
 
 struct BackProbe {
     uint64_t hits = 0;              // rays that hit a triangle

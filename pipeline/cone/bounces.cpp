@@ -215,7 +215,10 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
     }
     if (skyLit) {
         std::vector<vec3> skyE;
-        if (sky->irradiance) {
+        if (sky->irradiance && transport && sky->imageDraws && transport->skyCosine.size() == points.size()) {
+            skyE = sky->imageDraws(points);
+            for (size_t q = 0; q < skyE.size() && q < points.size(); ++q) skyE[q] += transport->skyCosine[q];
+        } else if (sky->irradiance) {
             skyE = sky->irradiance(points);
         } else {
             const std::vector<float> open =

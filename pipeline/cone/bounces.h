@@ -94,6 +94,9 @@ struct FaceTransport {
     // Per point, the weight of its rays that leave the scene: irradiance per unit radiance of
     // a uniform sky (π where nothing blocks it). Empty where the builder does not know it.
     std::vector<float> open;
+    // Per point, an image sky's light through those rays, each an image sky's share against
+    // the image draws that join them (bake/direct_light.h skyShare). Empty without an image sky.
+    std::vector<vec3> skyCosine;
     size_t pointCount() const { return begin.size() - 1; }
 };
 
@@ -101,11 +104,15 @@ struct FaceTransport {
 // their direct light before the first bounce, interpolated to the voxels' sides as the
 // bounces' irradiance is. At every gather point that is, for a uniform sky, radiance × the
 // point's openness (a FaceTransport's `open`, else `openness` of the points); for a sky with
-// an image, `irradiance` of the points (the receivers' estimate, bake/direct_light.h).
+// an image, `irradiance` of the points (the receivers' estimate, bake/direct_light.h), or,
+// where the transport's rays already hold their part (FaceTransport::skyCosine), those plus
+// `imageDraws` of the points.
 struct BounceSky {
+    using PerPoint = std::function<std::vector<vec3>(const std::vector<GatherPoint>& points)>;
     vec3 radiance{0.0f};
     std::function<std::vector<float>(const std::vector<GatherPoint>& points)> openness;
-    std::function<std::vector<vec3>(const std::vector<GatherPoint>& points)> irradiance;  // null: uniform
+    PerPoint irradiance;  // null: uniform
+    PerPoint imageDraws;
 };
 // E at every point of `transport` from `faces` (TBB-parallel; each point summed in entry
 // order: the same bytes at any thread count). Throws Error when a slot lies past `faces`.
