@@ -90,14 +90,12 @@ void runCyclesPoint(const BenchOptions& options, const CyclesPeer& peer, BenchPo
     if (uniformSky && !s.skyImage.empty())
         throw SettingsError("the Cycles peer takes a uniform sky or a sky image, not both");
     if (uniformSky) {
-        std::ostringstream sky;
-        sky.precision(9);
+        std::ostringstream sky;  // six significant digits, as the settings print them
         sky << " --sky " << s.sky.x << "," << s.sky.y << "," << s.sky.z;
         command += sky.str();
     }
     if (!s.skyImage.empty()) {
         std::ostringstream sky;
-        sky.precision(9);
         sky << " --sky-image " << shellQuote(fs::absolute(s.skyImage).string()) << " --sky-rotation " << s.skyRotation
             << " --sky-intensity " << s.skyIntensity;
         command += sky.str();
