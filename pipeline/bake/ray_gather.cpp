@@ -344,40 +344,47 @@ FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView
     return transport;
 }
 
+namespace {
+
+// Per point, `atFan(q, its fan)` (TBB-parallel, each point on its own: the same at any
+// thread count).
+template <typename T, typename AtFan>
+std::vector<T> perFan(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
+                      const TraceSceneView& scene, AtFan&& atFan) {
+    std::vector<T> values(points.size());
+    tbb::parallel_for(size_t(0), points.size(),
+                      [&](size_t q) { values[q] = atFan(q, rayFan(points[q], voxelSize, bvh, scene)); });
+    return values;
+}
+
+}  // namespace
+
 std::vector<float> skyOpenness(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
                                const TraceSceneView& scene, int raysPerAxis) {
     checkRays(raysPerAxis);
     const std::vector<vec3> pattern = fanPattern(raysPerAxis);
     const float rayWeight = kPi / float(pattern.size());
-    std::vector<float> open(points.size());
-    tbb::parallel_for(size_t(0), points.size(), [&](size_t q) {
+    return perFan<float>(points, voxelSize, bvh, scene, [&](size_t, const RayFan& fan) {
         size_t hits = 0;
-        traceFan(rayFan(points[q], voxelSize, bvh, scene), pattern, bvh, [&](const Ray&, const Hit&) { ++hits; });
-        open[q] = rayWeight * static_cast<float>(pattern.size() - hits);
+        traceFan(fan, pattern, bvh, [&](const Ray&, const Hit&) { ++hits; });
+        return rayWeight * static_cast<float>(pattern.size() - hits);
     });
-    return open;
 }
 
 std::vector<vec3> skyIrradianceAtPoints(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
                                         const TraceSceneView& scene, int strata) {
-    std::vector<vec3> irradiance(points.size());
-    tbb::parallel_for(size_t(0), points.size(), [&](size_t q) {
-        const RayFan fan = rayFan(points[q], voxelSize, bvh, scene);
-        irradiance[q] = skyIrradiance(scene, bvh, fan.origin, fan.normal, fan.normal, strata, uint64_t(q));
+    return perFan<vec3>(points, voxelSize, bvh, scene, [&](size_t q, const RayFan& fan) {
+        return skyIrradiance(scene, bvh, fan.origin, fan.normal, fan.normal, strata, uint64_t(q));
     });
-    return irradiance;
 }
 
 std::vector<vec3> skyImageDrawsAtPoints(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
                                         const TraceSceneView& scene, int drawsPerAxis, int raysPerAxis) {
-    std::vector<vec3> irradiance(points.size());
     const float cosineRays = float(raysPerAxis * raysPerAxis);
-    tbb::parallel_for(size_t(0), points.size(), [&](size_t q) {
-        const RayFan fan = rayFan(points[q], voxelSize, bvh, scene);
-        irradiance[q] = skyImageDrawsIrradiance(scene, bvh, fan.origin, fan.normal, fan.normal, drawsPerAxis, cosineRays,
-                                                uint64_t(q));
+    return perFan<vec3>(points, voxelSize, bvh, scene, [&](size_t q, const RayFan& fan) {
+        return skyImageDrawsIrradiance(scene, bvh, fan.origin, fan.normal, fan.normal, drawsPerAxis, cosineRays,
+                                       uint64_t(q));
     });
-    return irradiance;
 }
 
 BackProbe probeSingleSidedBacks(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,

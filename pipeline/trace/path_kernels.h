@@ -150,7 +150,8 @@ VL_HOSTDEV inline vec3 skyImageIrradianceSample(const TraceSceneView& s, const B
     vec2 u;
     rng.next2D(u.x, u.y);
     float pdf = 0.0f;
-    const vec3 wi = sampleSkyImage(s.sky, u, pdf);
+    vec2 at;
+    const vec3 wi = sampleSkyImage(s.sky, u, pdf, &at);
     if (!(pdf > 0.0f)) return vec3(0.0f);
     const float cosS = glm::dot(ns, wi);
     if (cosS <= 0.0f || glm::dot(ng, wi) <= 0.0f) return vec3(0.0f);
@@ -158,7 +159,7 @@ VL_HOSTDEV inline vec3 skyImageIrradianceSample(const TraceSceneView& s, const B
     ray.origin = offsetRayOrigin(p, ng, bvh.extent);
     ray.direction = wi;
     if (intersectAny(bvh, ray)) return vec3(0.0f);
-    const vec3 image = skyRadianceAlong(s.sky, wi) - s.sky.uniform;  // what the draw estimates
+    const vec3 image = skyRadianceAt(s.sky, at) - s.sky.uniform;  // what the draw estimates
     const vec3 contribution = image * (cosS * powerHeuristic(pdf, cosS * kInvPi) / pdf);
     return isFinite(contribution) ? contribution : vec3(0.0f);
 }
@@ -167,9 +168,9 @@ VL_HOSTDEV inline vec3 skyImageIrradianceSample(const TraceSceneView& s, const B
 // image's own draws (bsdfPdf 0: the camera's ray or a delta lobe, no weight).
 VL_HOSTDEV inline vec3 escapedRadiance(const SkyView& sky, const vec3& wi, float bsdfPdf) {
     if (!sky.hasImage()) return sky.uniform;
-    const vec3 image = skyRadianceAlong(sky, wi) - sky.uniform;
-    const float weight = bsdfPdf > 0.0f && sky.samplable() ? powerHeuristic(bsdfPdf, skyImagePdf(sky, wi)) : 1.0f;
-    return sky.uniform + image * weight;
+    const SkySeen seen = skySeenAlong(sky, wi);
+    const float weight = bsdfPdf > 0.0f && sky.samplable() ? powerHeuristic(bsdfPdf, seen.imagePdf) : 1.0f;
+    return sky.uniform + (seen.radiance - sky.uniform) * weight;
 }
 
 // The solid-angle pdf with which light sampling would have produced the direction that hit

@@ -87,21 +87,20 @@ VL_HOSTDEV inline int searchCdf(const float* cdf, int n, float u) {
 
 VL_HOSTDEV inline float cdfStep(const float* cdf, int i) { return cdf[i] - (i > 0 ? cdf[i - 1] : 0.0f); }
 
+// Solid-angle pdf of a uniform point of a pixel drawn with probability `pixel`, at polar sine
+// sin θ: the pixel spans 2π/W × π/H in (φ, θ), dω = sin θ dθ dφ.
+VL_HOSTDEV inline float skyPixelPdf(const SkyView& sky, float pixel, float sinTheta) {
+    return pixel * float(sky.width) * float(sky.height) / (2.0f * kPi * kPi * sinTheta);
+}
+
 // The solid-angle pdf of drawing the image-frame direction at `coordinates`, sin θ its
 // polar sine (0 without tables).
 VL_HOSTDEV inline float skyImagePdfAt(const SkyView& sky, vec2 coordinates, float sinTheta) {
     if (!sky.samplable() || !(sinTheta > 0.0f)) return 0.0f;
     const int row = glm::clamp(int(coordinates.y), 0, sky.height - 1);
     const int column = glm::clamp(int(coordinates.x), 0, sky.width - 1);
-    const float pixel = cdfStep(sky.rowCdf, row) * cdfStep(sky.columnCdf + size_t(row) * size_t(sky.width), column);
-    return pixel * float(sky.width) * float(sky.height) / (2.0f * kPi * kPi * sinTheta);
-}
-
-// The solid-angle pdf with which sampleSkyImage draws unit direction d (0 without tables).
-VL_HOSTDEV inline float skyImagePdf(const SkyView& sky, const vec3& d) {
-    if (!sky.samplable()) return 0.0f;
-    const vec3 e = sky.toImage(d);
-    return skyImagePdfAt(sky, sky.imageCoordinates(e), glm::sqrt(glm::max(0.0f, 1.0f - e.y * e.y)));
+    return skyPixelPdf(sky, cdfStep(sky.rowCdf, row) * cdfStep(sky.columnCdf + size_t(row) * size_t(sky.width), column),
+                       sinTheta);
 }
 
 // What the sky shows along unit direction d and the pdf of the image's draws there, from one
@@ -117,18 +116,19 @@ VL_HOSTDEV inline SkySeen skySeenAlong(const SkyView& sky, const vec3& d) {
     return {skyRadianceAt(sky, c), skyImagePdfAt(sky, c, glm::sqrt(glm::max(0.0f, 1.0f - e.y * e.y)))};
 }
 
+// The solid-angle pdf with which sampleSkyImage draws unit direction d (0 without tables).
+VL_HOSTDEV inline float skyImagePdf(const SkyView& sky, const vec3& d) { return skySeenAlong(sky, d).imagePdf; }
+
 // A direction drawn from the image's distribution at u ∈ [0, 1)²; pdf its solid-angle pdf
 // (0: nothing drawn); `coordinates`, when given, its image coordinates (for skyRadianceAt).
 VL_HOSTDEV inline vec3 sampleSkyImage(const SkyView& sky, vec2 u, float& pdf, vec2* coordinates = nullptr) {
     pdf = 0.0f;
     if (!sky.samplable()) return vec3(0.0f, 1.0f, 0.0f);
     const int row = searchCdf(sky.rowCdf, sky.height, u.x);
-    const float rowLow = row > 0 ? sky.rowCdf[row - 1] : 0.0f;
-    const float rowP = sky.rowCdf[row] - rowLow;
+    const float rowP = cdfStep(sky.rowCdf, row), rowLow = sky.rowCdf[row] - rowP;
     const float* columns = sky.columnCdf + size_t(row) * size_t(sky.width);
     const int column = searchCdf(columns, sky.width, u.y);
-    const float columnLow = column > 0 ? columns[column - 1] : 0.0f;
-    const float columnP = columns[column] - columnLow;
+    const float columnP = cdfStep(columns, column), columnLow = columns[column] - columnP;
     if (!(rowP > 0.0f) || !(columnP > 0.0f)) return vec3(0.0f, 1.0f, 0.0f);
     // The same uniforms, rescaled within the chosen row and column, place the point inside it.
     const float fy = glm::clamp((u.x - rowLow) / rowP, 0.0f, 1.0f);
@@ -138,7 +138,7 @@ VL_HOSTDEV inline vec3 sampleSkyImage(const SkyView& sky, vec2 u, float& pdf, ve
     const float sinTheta = glm::sin(theta);
     if (!(sinTheta > 0.0f)) return vec3(0.0f, 1.0f, 0.0f);
     const vec3 e(sinTheta * glm::cos(phi), glm::cos(theta), sinTheta * glm::sin(phi));
-    pdf = rowP * columnP * float(sky.width) * float(sky.height) / (2.0f * kPi * kPi * sinTheta);
+    pdf = skyPixelPdf(sky, rowP * columnP, sinTheta);
     if (coordinates) *coordinates = vec2(float(column) + fx, float(row) + fy);
     return sky.fromImage(e);
 }
