@@ -62,12 +62,14 @@ const std::vector<Placement>& placements() {
 
 const std::string kSource = "scenes/cornell_box.gltf";
 
-// The glTF at kSource with every scene root moved under one node that carries the placement.
-std::string placedCopy(const Placement& placement) {
+// The glTF at kSource with every scene root moved under one node that carries the placement,
+// written under test-output/<folder>. Each test case names its own folder: ctest runs them as
+// parallel processes, and one copying the buffer while another parses it reads an empty file.
+std::string placedCopy(const Placement& placement, const std::string& folder) {
     const fs::path source = fs::path(vl::test::sourceDir()) / kSource;
     nlohmann::json gltf;
     std::ifstream(source) >> gltf;
-    const fs::path dir = vl::test::tempDir("placement");
+    const fs::path dir = vl::test::tempDir(folder);
     for (const auto& buffer : gltf["buffers"]) {
         const std::string uri = buffer["uri"];
         fs::copy_file(source.parent_path() / uri, dir / uri, fs::copy_options::overwrite_existing);
@@ -95,8 +97,8 @@ Scene load(const std::string& path) {
 // The placed copy, checked to be placed: its local frame's origin is the base's moved by the
 // placement (world = t + s·R·x), and its size is s times the base's (quarter turns only
 // exchange the sides). Else a placement the loader ignored would pass as invariant.
-Scene loadPlaced(const Placement& placement, const Scene& base) {
-    Scene scene = load(placedCopy(placement));
+Scene loadPlaced(const Placement& placement, const Scene& base, const std::string& folder) {
+    Scene scene = load(placedCopy(placement, folder));
     glm::dquat rotation(1.0, 0.0, 0.0, 0.0);
     if (!placement.rotation.empty())
         rotation = glm::dquat(placement.rotation[3], placement.rotation[0], placement.rotation[1], placement.rotation[2]);
@@ -133,7 +135,7 @@ TEST_CASE("The bake does not change with the scene's scale, position or quarter 
     MetricOptions imageOptions;
     imageOptions.excludeReferenceAbove = 5.0f;  // the emitter, seen directly
     for (const Placement& placement : placements()) {
-        const BakeResult placed = bake(loadPlaced(placement, baseScene), settings, diagnostics);
+        const BakeResult placed = bake(loadPlaced(placement, baseScene, "placement-bake"), settings, diagnostics);
         REQUIRE(placed.lightmaps.size() == 1);
         REQUIRE(placed.images.size() == 1);
         const BakedLightmap& a = placed.lightmaps[0];
@@ -193,7 +195,7 @@ TEST_CASE("The path tracer's lightmap means do not change with the scene's scale
     const Scene baseScene = load(fs::path(vl::test::sourceDir()) / kSource);
     const Means base = trace(baseScene);
     for (const Placement& placement : placements()) {
-        const Means placed = trace(loadPlaced(placement, baseScene));
+        const Means placed = trace(loadPlaced(placement, baseScene, "placement-trace"));
         for (int c = 0; c < 3; ++c) {
             const double sigma = std::hypot(base.sigma[c], placed.sigma[c]);
             INFO(placement.name << ", channel " << c << ": mean " << placed.mean[c] << " against " << base.mean[c]

@@ -333,7 +333,7 @@ TEST_CASE("Bench refuses bad repeats and reports a bad VCT setting as a failed p
 
     options.repeats = 1;
     options.points = {{"vct", "bad", {{"cones", "0"}}, 0}};
-    options.referenceSettings = tinyReference(test::tempDir("bench_tiny_cache"));
+    options.referenceSettings = tinyReference(test::tempDir("bench_bad_cache"));
     options.blender = "none";
     options.plot = false;
     options.quiet = true;
