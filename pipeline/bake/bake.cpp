@@ -136,9 +136,13 @@ std::string generatedAtlasName(const LightmapSettings& settings) {
     return name;
 }
 
-BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnostics) {
+ReceiverScene::ReceiverScene(const Scene& scene)
+    : triangles(gatherTriangles(scene)), bvh(Bvh::build(triangles)), traceScene(TraceScene::build(scene, triangles)) {}
+
+VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnostics& diagnostics) {
     validateBakeSettings(settings);
-    BakeResult result;
+    VoxelStages stages;
+    BakeResult& result = stages.result;
     result.voxelSizeChoice = timed(result.stages, "voxel size", [&] { return chooseVoxelSize(scene, settings); });
     const VoxelSizeChoice& choice = result.voxelSizeChoice;
     VoxelSettings voxelSettings = settings.voxel;
@@ -151,7 +155,8 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
     for (const std::string& warning : choice.warnings) diagnostics.warn(warning);
     checkLightAttenuationNames(scene, settings.lighting);
     if (settings.outputs.lightmaps) checkAtlasGroups(scene, settings.lightmap);
-    LightmapSettings lightmap = settings.lightmap;  // generated UVs may need a larger atlas
+    LightmapSettings& lightmap = stages.lightmap;  // generated UVs may need a larger atlas
+    lightmap = settings.lightmap;
     // Generated UVs for the meshes of the shared atlas that have none: into the shared atlas
     // where none of its meshes has TEXCOORD_1, else into an image of their own (their charts
     // cannot share another layout's). Meshes of atlas groups, or of one image per mesh, keep
@@ -194,16 +199,7 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
         diagnostics.warn(scene.sourcePath + ": the scene has no lights, no emissive materials and no sky: the bake is black");
 
     // Voxel lighting and receiver shading run on the GPU when the settings pick it.
-    const bool onGpu = cuda::resolveDevice(settings.device, std::cerr);
-    const auto shade = [&](const SurfaceSampleSet& receivers, const TraceSceneView& sceneView, const BvhView& bvhView,
-                           const MipView& mipView, const IrradianceCacheView* cache, bool mayBeBuried,
-                           Progress& progress) {
-        if (onGpu)
-            return cuda::shadeReceiversCuda(receivers, sceneView, bvhView, &mipView, cache, settings.cone,
-                                            settings.direct, mayBeBuried);
-        return shadeReceivers(receivers, sceneView, bvhView, &mipView, cache, settings.cone, settings.direct,
-                              mayBeBuried, &progress);
-    };
+    const bool onGpu = stages.onGpu = cuda::resolveDevice(settings.device, std::cerr);
 
     result.voxels = timed(result.stages, "voxelize", [&] {
         Progress progress("voxelize", scene.triangleCount(), settings.quiet);
@@ -214,11 +210,9 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
         if (onGpu) return cuda::lightVoxelsCuda(scene, result.voxels, settings.lighting);
         return lightVoxels(scene, result.voxels, settings.lighting, &progress);
     });
-    const SceneTriangles triangles = gatherTriangles(scene);
-    const Bvh bvh = timed(result.stages, "bvh", [&] { return Bvh::build(triangles); });
-    const TraceScene traceScene = TraceScene::build(scene, triangles);
-    const TraceSceneView sceneView = traceScene.view();
-    const BvhView bvhView = bvh.view();
+    stages.tracing = timed(result.stages, "bvh", [&] { return std::make_unique<ReceiverScene>(scene); });
+    const TraceSceneView sceneView = stages.tracing->traceScene.view();
+    const BvhView bvhView = stages.tracing->bvh.view();
     const bool gathers =
         settings.bounces > 0 || (settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images));
     RadianceMips bounced;          // the bounces' own mips, relit with their result
@@ -272,7 +266,7 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
     const MipView mipView = result.mips.view();
 
     // The final gather, once for every receiver of every output.
-    IrradianceCache cache;
+    IrradianceCache& cache = stages.cache;
     if (settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images)) {
         timed(result.stages, "gather", [&] {
             // The bright patches leave the light the gather reads (the rays read faces, the
@@ -316,47 +310,94 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
         });
         result.gatherPoints = cache.points().size();
     }
-    const IrradianceCacheView cacheView = cache.view(mipView);
-    const IrradianceCacheView* gathered = settings.gatherLevel >= 0 ? &cacheView : nullptr;
+    return stages;
+}
 
+std::vector<Camera> bakeCameras(const Scene& scene, const BakeSettings& settings) {
+    std::vector<Camera> cameras = scene.cameras;
+    const float aspect = static_cast<float>(settings.imageWidth) / static_cast<float>(settings.imageHeight);
+    if (cameras.empty()) cameras.push_back(defaultCamera(scene.bounds(), aspect));
+    return cameras;
+}
+
+ReceiverShading::ReceiverShading(const ReceiverScene& tracing, const RadianceMips& mips, const IrradianceCache& cache,
+                                 const BakeSettings& settings, bool onGpu)
+    : tracing_(tracing),
+      settings_(settings),
+      onGpu_(onGpu),
+      mipView_(mips.view()),
+      cacheView_(cache.view(mipView_)),
+      gathered_(settings.gatherLevel >= 0 ? &cacheView_ : nullptr) {}
+
+ReceiverLighting ReceiverShading::shadeAtlasRows(const LightmapAtlas& atlas, int rowBegin, int rowEnd) const {
+    const SurfaceSampleSet& receivers = atlas.receivers;
+    const size_t first = static_cast<size_t>(rowBegin) * static_cast<size_t>(receivers.width);
+    const size_t last = static_cast<size_t>(rowEnd) * static_cast<size_t>(receivers.width);
+    Progress progress("lightmap " + atlas.name, last - first, settings_.quiet);
+    ReceiverLighting lit;
+    if (onGpu_) {
+        // The GPU shades whole atlases; rows outside the band are cleared.
+        lit = cuda::shadeReceiversCuda(receivers, tracing_.traceScene.view(), tracing_.bvh.view(), &mipView_, gathered_,
+                                       settings_.cone, settings_.direct, true);
+        for (Image* image : {&lit.direct, &lit.indirect, &lit.directRadiance, &lit.indirectRadiance})
+            for (size_t k = 0; k < image->pixels.size(); ++k) {
+                const size_t element = k / 3;
+                if (element < first || element >= last) image->pixels[k] = 0.0f;
+            }
+    } else {
+        lit = shadeReceivers(receivers, tracing_.traceScene.view(), tracing_.bvh.view(), &mipView_, gathered_,
+                             settings_.cone, settings_.direct, true, &progress, first, last);
+    }
+    progress.finish();
+    return lit;
+}
+
+BakedImage ReceiverShading::shadeCamera(const Camera& camera) const {
+    const CameraModel model = makeCameraModel(camera, settings_.imageWidth, settings_.imageHeight);
+    const CameraReceivers receivers = buildCameraReceivers(tracing_.traceScene, tracing_.bvh, model,
+                                                           settings_.imageSubsamples, kEmissionSubsamples, true);
+    Progress progress("image", receivers.receivers.elementCount(), settings_.quiet);
+    const TraceSceneView sceneView = tracing_.traceScene.view();
+    const BvhView bvhView = tracing_.bvh.view();
+    const ReceiverLighting lit =
+        onGpu_ ? cuda::shadeReceiversCuda(receivers.receivers, sceneView, bvhView, &mipView_, gathered_, settings_.cone,
+                                          settings_.direct, false)
+               : shadeReceivers(receivers.receivers, sceneView, bvhView, &mipView_, gathered_, settings_.cone,
+                                settings_.direct, false, &progress);
+    progress.finish();
+    return {camera.name, sumRgb(sumRgb(receivers.emission, lit.directRadiance), lit.indirectRadiance),
+            lit.directRadiance, lit.indirectRadiance, receivers.albedo};
+}
+
+BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, const Image& indirect) {
+    BakedLightmap baked{atlas.name, sumRgb(direct, indirect), direct, indirect, atlas.mask, atlas.coveredTexels,
+                        atlas.meshes};
+    // Padding texels take their covered neighbours' values, so bilinear filtering at chart
+    // edges does not bleed black.
+    for (Image* image : {&baked.total, &baked.direct, &baked.indirect}) dilatePadding(*image, atlas.mask);
+    return baked;
+}
+
+BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnostics) {
+    VoxelStages stages = bakeVoxelStages(scene, settings, diagnostics);
+    BakeResult& result = stages.result;
+    const ReceiverShading shading(*stages.tracing, result.mips, stages.cache, settings, stages.onGpu);
     if (settings.outputs.lightmaps) {
         timed(result.stages, "lightmaps", [&] {
-            for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, lightmap, diagnostics)) {
-                Progress progress("lightmap " + atlas.name, atlas.receivers.elementCount(), settings.quiet);
-                const ReceiverLighting lit = shade(atlas.receivers, sceneView, bvhView, mipView, gathered, true, progress);
-                progress.finish();
-                BakedLightmap baked{atlas.name, sumRgb(lit.direct, lit.indirect), lit.direct, lit.indirect, atlas.mask,
-                                    atlas.coveredTexels, atlas.meshes};
-                // Padding texels take their covered neighbours' values, so bilinear filtering
-                // at chart edges does not bleed black.
-                for (Image* image : {&baked.total, &baked.direct, &baked.indirect}) dilatePadding(*image, atlas.mask);
-                result.lightmaps.push_back(std::move(baked));
+            for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics)) {
+                const ReceiverLighting lit = shading.shadeAtlasRows(atlas, 0, atlas.receivers.height);
+                result.lightmaps.push_back(finishLightmap(atlas, lit.direct, lit.indirect));
             }
             return 0;
         });
     }
-
     if (settings.outputs.images) {
         timed(result.stages, "images", [&] {
-            std::vector<Camera> cameras = scene.cameras;
-            const float aspect = static_cast<float>(settings.imageWidth) / static_cast<float>(settings.imageHeight);
-            if (cameras.empty()) cameras.push_back(defaultCamera(scene.bounds(), aspect));
-            for (const Camera& camera : cameras) {
-                const CameraModel model = makeCameraModel(camera, settings.imageWidth, settings.imageHeight);
-                const CameraReceivers receivers = buildCameraReceivers(traceScene, bvh, model, settings.imageSubsamples,
-                                                                       kEmissionSubsamples, true);
-                Progress progress("image", receivers.receivers.elementCount(), settings.quiet);
-                const ReceiverLighting lit =
-                    shade(receivers.receivers, sceneView, bvhView, mipView, gathered, false, progress);
-                progress.finish();
-                result.images.push_back({camera.name,
-                                         sumRgb(sumRgb(receivers.emission, lit.directRadiance), lit.indirectRadiance),
-                                         lit.directRadiance, lit.indirectRadiance, receivers.albedo});
-            }
+            for (const Camera& camera : bakeCameras(scene, settings)) result.images.push_back(shading.shadeCamera(camera));
             return 0;
         });
     }
-    return result;
+    return std::move(result);
 }
 
 }  // namespace vl

@@ -8,6 +8,7 @@
 #include "bake/bake_settings.h"
 #include "bake/ray_gather.h"
 #include "bake/receivers.h"
+#include "bake/shade_receivers.h"
 #include "bake/voxel_size.h"
 #include "cone/irradiance_cache.h"
 #include "cone/radiance_mips.h"
@@ -15,9 +16,12 @@
 #include "core/image.h"
 #include "scene/scene.h"
 #include "export/gltf_export.h"
+#include "trace/bvh.h"
+#include "trace/trace_scene.h"
 #include "unwrap/lightmap_uvs.h"
 #include "voxel/voxel_scene.h"
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -64,6 +68,58 @@ struct BakeResult {
     std::optional<LightmapUvReport> lightmapUvs;  // when the bake generated TEXCOORD_1 (unwrap/lightmap_uvs.h)
     std::vector<GeneratedLayout> generatedLayouts;  // then, per scene mesh: what glTF out writes
 };
+
+// The bake runs in two halves: the voxel stages, once per scene, and the receivers (each
+// lightmap atlas, each camera), which read only what the voxel stages left. `bake` runs both
+// in one process; a cluster bake (cluster/units.h) runs them as separate units, and the
+// receivers of one atlas in bands of rows.
+
+// What receivers trace against: the scene's triangles, their BVH and materials.
+struct ReceiverScene {
+    SceneTriangles triangles;
+    Bvh bvh;
+    TraceScene traceScene;
+    explicit ReceiverScene(const Scene& scene);
+};
+
+struct VoxelStages {
+    BakeResult result;          // every field but lightmaps and images
+    LightmapSettings lightmap;  // the settings', with the atlas generated lightmap UVs need
+    IrradianceCache cache;      // the final gather; no points when gather-level < 0
+    bool onGpu = false;         // the device the settings resolved to
+    std::unique_ptr<ReceiverScene> tracing;
+};
+
+// The voxel size, generated lightmap UVs, voxelize, voxel light, visibility, bounces, mips and
+// the final gather. `scene` leaves anchored to the voxel grid and with its generated UVs: the
+// scene its receivers see. Checks that cost nothing come first (see bake below).
+VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnostics& diagnostics);
+
+// The cameras a bake renders: the scene's, else one looking at its bounds.
+std::vector<Camera> bakeCameras(const Scene& scene, const BakeSettings& settings);
+
+// Receivers lit from the voxel stages' mips and gather.
+class ReceiverShading {
+public:
+    ReceiverShading(const ReceiverScene& tracing, const RadianceMips& mips, const IrradianceCache& cache,
+                    const BakeSettings& settings, bool onGpu);
+    // Rows [rowBegin, rowEnd) of an atlas; the other rows stay 0. Each texel's value does not
+    // depend on which rows are shaded with it.
+    ReceiverLighting shadeAtlasRows(const LightmapAtlas& atlas, int rowBegin, int rowEnd) const;
+    BakedImage shadeCamera(const Camera& camera) const;
+
+private:
+    const ReceiverScene& tracing_;
+    const BakeSettings& settings_;
+    bool onGpu_;
+    MipView mipView_;
+    IrradianceCacheView cacheView_;
+    const IrradianceCacheView* gathered_;
+};
+
+// An atlas's finished images from its receivers' direct and indirect light: the total, and
+// padding texels dilated from their covered neighbours in all three.
+BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, const Image& indirect);
 
 // Checks that cost nothing (settings ranges, voxel count, memory) run first; throws
 // SettingsError / InputError before any expensive stage.

@@ -10,7 +10,9 @@
 #include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -185,17 +187,30 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
 
     const auto loadStart = std::chrono::steady_clock::now();
     Scene scene = loadJobScene(job);
-    // What glTF out needs of the scene the bake consumes: its file and where each mesh came from.
-    const std::string sourcePath = scene.sourcePath;
-    std::vector<Mesh::Source> meshSources;
-    for (const Mesh& mesh : scene.meshes) meshSources.push_back(mesh.source);
-    const vec3 viewerSky = scene.sky.meanRadiance();  // glTF holds no sky: viewers get its mean
+    const ExportSource source = exportSourceOf(scene);
     report.stages.push_back({"load", std::chrono::duration<double>(std::chrono::steady_clock::now() - loadStart).count()});
     report.triangles = scene.triangleCount();
     report.warnings = scene.warnings;
 
     BakeResult result = bake(std::move(scene), settings, diagnostics);
     report.stages.insert(report.stages.end(), result.stages.begin(), result.stages.end());
+    writeBakeFiles(job, result, source, report, staging, diagnostics);
+}
+
+}  // namespace
+
+ExportSource exportSourceOf(const Scene& scene) {
+    ExportSource source;
+    source.sourcePath = scene.sourcePath;
+    for (const Mesh& mesh : scene.meshes) source.meshSources.push_back(mesh.source);
+    source.viewerSky = scene.sky.meanRadiance();  // glTF holds no sky: viewers get its mean
+    return source;
+}
+
+void writeBakeFiles(const BakeJob& job, BakeResult& result, const ExportSource& source, BakeReport& report,
+                    const std::string& stagingDir, Diagnostics& diagnostics) {
+    const BakeSettings& settings = job.settings;
+    const fs::path staging(stagingDir);
     report.voxels = result.voxels.size();
     report.voxelSize = result.voxels.voxelSize;
     report.voxelSizeChoice = result.voxelSizeChoice;
@@ -232,18 +247,18 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
         result.voxels.settings = describeBakeSettings(settings);
         files.add("grids.vdb", [&](const std::string& p) { writeVoxelFile(result.voxels, p, mipGridsForFile(result.mips)); });
     }
-    if (settings.outputs.gltf && isGltfFile(sourcePath))
+    if (settings.outputs.gltf && isGltfFile(source.sourcePath))
         files.add("scene.glb", [&](const std::string& p) {
             std::vector<ExportedLightmap> lightmaps;
             for (const BakedLightmap& lightmap : result.lightmaps)
                 lightmaps.push_back({lightmap.name, lightmap.meshes, encodeRgbm(lightmap.total)});
-            writeLightmappedGlb(sourcePath, meshSources, result.generatedLayouts, lightmaps, job.addedCameras, p,
-                                diagnostics, viewerSky);
+            writeLightmappedGlb(source.sourcePath, source.meshSources, result.generatedLayouts, lightmaps,
+                                job.addedCameras, p, diagnostics, source.viewerSky);
         });
     files.writeAll();
     report.stages.push_back({"write", std::chrono::duration<double>(std::chrono::steady_clock::now() - writeStart).count()});
     report.warnings.insert(report.warnings.end(), diagnostics.warnings().begin(), diagnostics.warnings().end());
-    report.peakMemoryBytes = peakResidentBytes();
+    report.peakMemoryBytes = std::max(report.peakMemoryBytes, peakResidentBytes());
     report.files.push_back("bake.json");
     writeAtomically((staging / "bake.json").string(), [&](const std::string& temp) {
         std::ofstream out(temp);
@@ -252,9 +267,7 @@ void bakeToFolder(const BakeJob& job, BakeReport& report, const fs::path& stagin
     });
 }
 
-}  // namespace
-
-BakeReport runBake(const BakeJob& job) {
+BakeReport publishBake(const BakeJob& job, const std::function<void(BakeReport&, const std::string&)>& write) {
     BakeReport report;
     report.scenePath = job.scenePath;
     report.outputDir = job.outputDir;
@@ -264,7 +277,7 @@ BakeReport runBake(const BakeJob& job) {
         const OutputLock lock(target);
         removeDeadStaging(target);
         fs::create_directories(staging);
-        bakeToFolder(job, report, staging);
+        write(report, staging.string());
         publish(staging, target);
         report.ok = true;
     } catch (const std::exception& e) {
@@ -273,8 +286,23 @@ BakeReport runBake(const BakeJob& job) {
         std::error_code ignored;
         fs::remove_all(staging, ignored);
     }
-    report.peakMemoryBytes = peakResidentBytes();
+    report.peakMemoryBytes = std::max(report.peakMemoryBytes, peakResidentBytes());
     return report;
+}
+
+BakeReport runBake(const BakeJob& job) {
+    return publishBake(job, [&](BakeReport& report, const std::string& staging) { bakeToFolder(job, report, staging); });
+}
+
+void printBakeSummary(const std::vector<BakeReport>& reports) {
+    std::fprintf(stderr, "\n%-28s %-6s %9s %10s %10s %9s %8s  %s\n", "scene", "status", "voxels", "texels", "pixels",
+                 "seconds", "peak MB", "output");
+    for (const BakeReport& r : reports) {
+        const std::string name = fs::path(r.scenePath).filename().string();
+        std::fprintf(stderr, "%-28s %-6s %9zu %10zu %10zu %9.2f %8.0f  %s\n", name.c_str(), r.ok ? "ok" : "FAILED",
+                     r.voxels, r.coveredTexels, r.pixels, r.totalSeconds(), r.peakMemoryBytes / 1048576.0,
+                     r.ok ? r.outputDir.c_str() : r.error.c_str());
+    }
 }
 
 void addJobLightsAndCameras(const BakeJob& job, Scene& scene) {

@@ -6,6 +6,7 @@
 
 #include "bake/bake.h"
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -54,5 +55,29 @@ struct BakeReport {
 
 // Runs one bake; returns a report instead of throwing for problems of the scene or settings.
 BakeReport runBake(const BakeJob& job);
+
+// The batch's table on stderr: per scene its status, voxels, texels, pixels, seconds, peak
+// memory and output folder (or error).
+void printBakeSummary(const std::vector<BakeReport>& reports);
+
+// What glTF out needs of the scene a bake consumed: its file and where each mesh came from.
+struct ExportSource {
+    std::string sourcePath;
+    std::vector<Mesh::Source> meshSources;
+    vec3 viewerSky{0.0f};  // glTF holds no sky: viewers get its mean radiance
+};
+ExportSource exportSourceOf(const Scene& scene);
+
+// A bake's files from its result, into `staging`: lightmaps and images (EXR, PNG), grids.vdb,
+// scene.glb, then bake.json from `report` (its figures filled from `result` here) with the
+// warnings `diagnostics` collected appended. A local bake and a cluster bake's merge
+// (cluster/units.h) write through this one function.
+void writeBakeFiles(const BakeJob& job, BakeResult& result, const ExportSource& source, BakeReport& report,
+                    const std::string& staging, Diagnostics& diagnostics);
+
+// Runs `write` into a staging folder beside job.outputDir while holding the folder's lock,
+// then moves its files in (bake.json last); on an exception no file is moved and the report
+// says why.
+BakeReport publishBake(const BakeJob& job, const std::function<void(BakeReport& report, const std::string& staging)>& write);
 
 }  // namespace vl

@@ -6,17 +6,20 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+
 namespace vl {
 
 ReceiverLighting shadeReceivers(const SurfaceSampleSet& receivers, const TraceSceneView& scene, const BvhView& bvh,
                                 const MipView* mips, const IrradianceCacheView* cache, const ConeSettings& cone,
-                                const DirectLightSettings& direct, bool mayBeBuried, Progress* progress) {
+                                const DirectLightSettings& direct, bool mayBeBuried, Progress* progress,
+                                size_t firstElement, size_t lastElement) {
     ReceiverLighting out;
     for (Image* image : {&out.direct, &out.indirect, &out.directRadiance, &out.indirectRadiance})
         *image = Image(receivers.width, receivers.height, 3);
     const ConeSet& set = coneSet(cone.coneCount);
-    const size_t elements = receivers.elementCount();
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, elements, 64), [&](const tbb::blocked_range<size_t>& range) {
+    const size_t elements = std::min(receivers.elementCount(), lastElement);
+    tbb::parallel_for(tbb::blocked_range<size_t>(std::min(firstElement, elements), elements, 64), [&](const tbb::blocked_range<size_t>& range) {
         for (size_t e = range.begin(); e != range.end(); ++e) {
             const ElementLighting lit = shadeReceiverElement(scene, bvh, mips, cache, set, cone, direct,
                                                              receivers.samples.data(), receivers.begin[e],

@@ -12,6 +12,8 @@
 #include "trace/bvh.h"
 #include "trace/surface_samples.h"
 
+#include <cstdint>
+
 namespace vl {
 
 class Progress;
@@ -26,9 +28,12 @@ struct ReceiverLighting {
 // `mips` may be null (no indirect light: direct only). `cache`, when given, holds the
 // irradiance that receivers interpolate (shade_element.h indirectIrradiance); without it
 // every sample gathers its own cones. `mayBeBuried`: the receivers are lightmap texels,
-// which can lie inside closed geometry (shade_element.h isBuried).
+// which can lie inside closed geometry (shade_element.h isBuried). Only elements [firstElement,
+// lastElement) are shaded (the rest stay 0); an element's value does not depend on the range,
+// since each sample seeds its generator with its index in the whole set.
 ReceiverLighting shadeReceivers(const SurfaceSampleSet& receivers, const TraceSceneView& scene, const BvhView& bvh,
                                 const MipView* mips, const IrradianceCacheView* cache, const ConeSettings& cone,
-                                const DirectLightSettings& direct, bool mayBeBuried, Progress* progress = nullptr);
+                                const DirectLightSettings& direct, bool mayBeBuried, Progress* progress = nullptr,
+                                size_t firstElement = 0, size_t lastElement = SIZE_MAX);
 
 }  // namespace vl

@@ -1,46 +1,97 @@
 // voxlight bake [scene.gltf | job.json …]: the batch bake. Each scene bakes into
 // output/<name>/ (or -o); a scene that fails is reported and the batch goes on; the exit
-// code is non-zero when any scene failed.
+// code is non-zero when any scene failed. With --slurm the job goes to a Slurm cluster as
+// units (cluster/slurm.h) and the command returns once it is submitted.
 #include "tools/voxlight/commands.h"
 
 #include "bake/bake_job.h"
 #include "bake/job_file.h"
+#include "cluster/slurm.h"
 #include "core/error.h"
 
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <unistd.h>
 #include <utility>
 
 namespace vl::cli {
 namespace {
 
+namespace fs = std::filesystem;
+
+bool isJobFile(const std::string& path) { return fs::path(path).extension() == ".json"; }
+
 struct BakeOptions {
-    std::vector<std::string> inputs;
-    std::string output;
-    std::vector<std::pair<std::string, std::string>> settings;  // in command-line order
-    bool strict = false;
+    cluster::PlannedCommand command;
     bool quiet = false;
+    bool slurm = false;
+    bool wait = false;
+    std::string status;  // --slurm-status <output root>
+    cluster::SlurmOptions slurmOptions;
 };
 
-bool isJobFile(const std::string& path) { return std::filesystem::path(path).extension() == ".json"; }
+// The command as the units see it: inputs and the output root absolute (they run elsewhere),
+// the default scene named.
+cluster::PlannedCommand absoluteCommand(cluster::PlannedCommand command) {
+    if (command.inputs.empty()) command.inputs.push_back(defaultScenePath());
+    for (std::string& input : command.inputs) input = fs::absolute(input).lexically_normal().string();
+    command.output = fs::absolute(command.output.empty() ? "output" : command.output).lexically_normal().string();
+    return command;
+}
 
-std::vector<BakeJob> planJobs(const BakeOptions& options) {
+void submitToSlurm(const BakeOptions& options) {
+    cluster::ClusterPlan plan;
+    plan.command = absoluteCommand(options.command);
+    plan.workDir = cluster::workFolder(plan.command.output);
+    plan.voxlight = fs::read_symlink("/proc/self/exe").string();
+    plan.chdir = fs::current_path().string();
+    std::vector<std::string> jobFiles;
+    for (const std::string& input : plan.command.inputs)
+        if (isJobFile(input)) jobFiles.push_back(input);
+    for (const BakeJob& job : planJobs(plan.command, true)) {
+        cluster::ClusterPlan::Scene scene;
+        scene.scenePath = job.scenePath;
+        scene.outputDir = job.outputDir;
+        scene.fingerprint = cluster::fingerprint(job, jobFiles);
+        try {
+            scene.units = cluster::planSceneUnits(job, options.slurmOptions.bands);
+        } catch (const std::exception&) {
+            // A scene that does not load fails in its voxel unit, which reports why as a local
+            // bake does; one camera unit stands for the cameras it never showed.
+            scene.units = cluster::planSceneUnits(job, options.slurmOptions.bands, 1);
+        }
+        plan.scenes.push_back(scene);
+    }
+    for (const std::string& line : cluster::submit(plan, options.slurmOptions)) std::printf("%s\n", line.c_str());
+    std::fflush(stdout);
+    if (!options.wait || options.slurmOptions.dryRun) return;
+    cluster::waitForMerge(plan);
+    for (const std::string& line : cluster::slurmStatus(plan.command.output)) std::printf("%s\n", line.c_str());
+    const nlohmann::json summary = cluster::readSummary(plan.workDir);
+    if (summary.is_null()) throw Error("the merge job ended without a summary: see " + plan.workDir + "/logs/merge.out");
+    for (const auto& scene : summary.at("scenes"))
+        if (!scene.at("ok").get<bool>()) throw Error("at least one scene of the cluster bake failed");
+}
+
+}  // namespace
+
+std::vector<BakeJob> planJobs(const cluster::PlannedCommand& command, bool quiet) {
     BakeSettings settings;
-    for (const auto& [name, value] : options.settings) applySetting(bakeSettingsTable(), settings, name, value);
-    settings.strict = options.strict;
-    settings.quiet = options.quiet;
+    for (const auto& [name, value] : command.settings) applySetting(bakeSettingsTable(), settings, name, value);
+    settings.strict = command.strict;
+    settings.quiet = quiet;
     validateBakeSettings(settings);
 
-    std::vector<std::string> inputs = options.inputs;
+    std::vector<std::string> inputs = command.inputs;
     if (inputs.empty()) inputs.push_back(defaultScenePath());
     const bool single = inputs.size() == 1 && !isJobFile(inputs[0]);
     std::vector<BakeJob> jobs;
     for (const std::string& input : inputs) {
         if (isJobFile(input)) {
-            for (BakeJob& job : readJobFile(input, settings, options.output.empty() ? "output" : options.output)) {
-                job.settings.strict = job.settings.strict || options.strict;
-                job.settings.quiet = options.quiet;
+            for (BakeJob& job : readJobFile(input, settings, command.output.empty() ? "output" : command.output)) {
+                job.settings.strict = job.settings.strict || command.strict;
+                job.settings.quiet = quiet;
                 jobs.push_back(std::move(job));
             }
             continue;
@@ -50,52 +101,73 @@ std::vector<BakeJob> planJobs(const BakeOptions& options) {
         job.settings = settings;
         const std::string name = sceneOutputName(input);
         // -o names the folder itself for one scene, the root folder for several.
-        job.outputDir = options.output.empty() ? "output/" + name
-                        : single             ? options.output
-                                             : options.output + "/" + name;
+        job.outputDir = command.output.empty() ? "output/" + name
+                        : single             ? command.output
+                                             : command.output + "/" + name;
         jobs.push_back(std::move(job));
     }
     return jobs;
 }
 
-void printSummary(const std::vector<BakeReport>& reports) {
-    std::fprintf(stderr, "\n%-28s %-6s %9s %10s %10s %9s %8s  %s\n", "scene", "status", "voxels", "texels", "pixels",
-                 "seconds", "peak MB", "output");
-    for (const BakeReport& r : reports) {
-        const std::string name = std::filesystem::path(r.scenePath).filename().string();
-        std::fprintf(stderr, "%-28s %-6s %9zu %10zu %10zu %9.2f %8.0f  %s\n", name.c_str(), r.ok ? "ok" : "FAILED",
-                     r.voxels, r.coveredTexels, r.pixels, r.totalSeconds(), r.peakMemoryBytes / 1048576.0,
-                     r.ok ? r.outputDir.c_str() : r.error.c_str());
-    }
-}
-
-}  // namespace
-
 void addBakeCommand(CLI::App& app) {
     auto options = std::make_shared<BakeOptions>();
     auto* cmd = app.add_subcommand("bake", "bake lightmaps, images and grids for glTF scenes or job files "
                                            "(default: the Cornell box into output/cornell_box/)");
-    cmd->add_option("inputs", options->inputs, "scene files (.gltf, .glb) and job files (.json)");
-    cmd->add_option("-o,--output", options->output,
+    cmd->add_option("inputs", options->command.inputs, "scene files (.gltf, .glb) and job files (.json)");
+    cmd->add_option("-o,--output", options->command.output,
                     "output folder (one scene) or root folder (several); default output/<scene name>");
-    cmd->add_flag("--strict", options->strict, "treat every warning as an error");
+    cmd->add_flag("--strict", options->command.strict, "treat every warning as an error");
     cmd->add_flag("-q,--quiet", options->quiet, "no progress on stderr");
+    cmd->add_flag("--slurm", options->slurm,
+                  "submit the bake to a Slurm cluster as units (voxel stages, lightmap bands, cameras, merge) and "
+                  "return; the output folder must be on a file system every node sees at the same path")
+        ->group("Cluster");
+    cmd->add_option("--partition", options->slurmOptions.partition, "Slurm partition for every unit")->group("Cluster");
+    cmd->add_option("--time", options->slurmOptions.time, "Slurm time limit per unit (sbatch --time)")->group("Cluster");
+    cmd->add_option("--max-parallel", options->slurmOptions.maxParallel, "array tasks running at once (0: no limit)")
+        ->check(CLI::NonNegativeNumber)
+        ->group("Cluster");
+    cmd->add_option("--cpus-per-task", options->slurmOptions.cpusPerTask,
+                    "CPUs per unit (sbatch --cpus-per-task; the unit uses that many threads)")
+        ->check(CLI::NonNegativeNumber)
+        ->group("Cluster");
+    cmd->add_option("--lightmap-bands", options->slurmOptions.bands,
+                    "units per scene's lightmaps, each a band of rows of every atlas (0: one per 1024 x 1024 texels)")
+        ->check(CLI::Range(0, 4096))
+        ->group("Cluster");
+    cmd->add_flag("--slurm-dry-run", options->slurmOptions.dryRun, "print the batch scripts and sbatch commands only")
+        ->group("Cluster");
+    cmd->add_flag("--slurm-wait", options->wait,
+                  "after submitting, wait for the merge and exit non-zero if a scene failed")
+        ->group("Cluster");
+    cmd->add_option("--slurm-status", options->status,
+                    "the state of the cluster bake submitted into this output folder, per unit")
+        ->group("Cluster");
     for (const auto& spec : bakeSettingsTable()) {
         const std::string name = spec.name;
         cmd->add_option_function<std::string>(
-               "--" + name, [options, name](const std::string& value) { options->settings.emplace_back(name, value); },
+               "--" + name,
+               [options, name](const std::string& value) { options->command.settings.emplace_back(name, value); },
                spec.help)
             ->group("Bake settings");
     }
     cmd->callback([options] {
-        const std::vector<BakeJob> jobs = planJobs(*options);
+        if (!options->status.empty()) {
+            for (const std::string& line : cluster::slurmStatus(options->status)) std::printf("%s\n", line.c_str());
+            return;
+        }
+        if (options->slurm || options->slurmOptions.dryRun) {
+            submitToSlurm(*options);
+            return;
+        }
+        const std::vector<BakeJob> jobs = planJobs(options->command, options->quiet);
         std::vector<BakeReport> reports;
         for (const BakeJob& job : jobs) {
             if (!options->quiet) std::fprintf(stderr, "baking %s -> %s\n", job.scenePath.c_str(), job.outputDir.c_str());
             reports.push_back(runBake(job));
             if (!reports.back().ok) std::fprintf(stderr, "error: %s\n", reports.back().error.c_str());
         }
-        printSummary(reports);
+        printBakeSummary(reports);
         for (const BakeReport& r : reports)
             if (!r.ok) throw Error(std::to_string(reports.size()) + " scene(s) baked, at least one failed");
     });

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
     vl::cli::addReferenceCommand(app);
     vl::cli::addLightCommand(app);
     vl::cli::addBakeCommand(app);
+    vl::cli::addBakeUnitCommand(app);
     vl::cli::addBenchCommand(app);
     vl::cli::addViewCommand(app);
     try {

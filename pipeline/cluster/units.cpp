@@ -1,0 +1,305 @@
+#include "cluster/units.h"
+
+#include "cluster/unit_file.h"
+#include "cluster/voxel_state.h"
+#include "core/error.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sys/resource.h>
+#include <unistd.h>
+
+namespace vl::cluster {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr const char* kRecordFile = "unit.json";
+constexpr const char* kStateFile = "voxel-state.vxu";
+constexpr const char* kBandFile = "band.vxu";
+constexpr const char* kImageFile = "image.vxu";
+
+std::string hostName() {
+    char name[256] = {0};
+    if (::gethostname(name, sizeof name - 1) != 0) return "unknown-host";
+    return name;
+}
+
+std::string slurmJobText() {
+    const char* array = std::getenv("SLURM_ARRAY_JOB_ID");
+    const char* task = std::getenv("SLURM_ARRAY_TASK_ID");
+    if (array && task) return std::string(array) + "_" + task;
+    const char* job = std::getenv("SLURM_JOB_ID");
+    return job ? job : "";
+}
+
+long peakResidentBytes() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return usage.ru_maxrss * 1024L;
+}
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Runs `work` into a staging folder beside sceneWork/folder, records how it went in
+// unit.json there and renames the staging folder into place (an older result goes first).
+template <typename Work>
+UnitRecord runUnit(const std::string& sceneWork, const std::string& folder, Work&& work) {
+    UnitRecord record;
+    record.host = hostName();
+    record.slurmJob = slurmJobText();
+    const fs::path target = fs::path(sceneWork) / folder;
+    const fs::path staging =
+        fs::path(sceneWork) / (folder + ".partial-" + record.host + "-" + std::to_string(::getpid()));
+    fs::remove_all(staging);
+    fs::create_directories(staging);
+    try {
+        work(staging, record);
+        record.ok = true;
+    } catch (const std::exception& e) {
+        record.ok = false;
+        record.error = e.what();
+    }
+    record.peakMemoryBytes = peakResidentBytes();
+    const json j = {{"ok", record.ok},           {"error", record.error}, {"seconds", record.seconds},
+                    {"host", record.host},       {"slurm_job", record.slurmJob},
+                    {"peak_memory_bytes", record.peakMemoryBytes}};
+    {
+        std::ofstream out(staging / kRecordFile);
+        out << j.dump(2) << '\n';
+        if (!out) throw Error("cannot write " + (staging / kRecordFile).string());
+    }
+    fs::remove_all(target);
+    fs::rename(staging, target);
+    return record;
+}
+
+std::pair<int, int> bandRows(int height, int band, int bands) {
+    return {static_cast<int>(int64_t(height) * band / bands), static_cast<int>(int64_t(height) * (band + 1) / bands)};
+}
+
+// The voxel unit's state, once its record says it succeeded.
+VoxelState finishedVoxelState(const std::string& sceneWork) {
+    const fs::path folder = fs::path(sceneWork) / kVoxelFolder;
+    const std::optional<UnitRecord> record = readUnitRecord(folder.string());
+    if (!record) throw Error("the voxel unit has not finished (" + folder.string() + " holds no result)");
+    if (!record->ok) throw Error(record->error);
+    return readVoxelState((folder / kStateFile).string());
+}
+
+std::vector<float> rows(const Image& image, int rowBegin, int rowEnd) {
+    const size_t rowFloats = size_t(image.width) * size_t(image.channels);
+    return std::vector<float>(image.pixels.begin() + long(rowFloats * size_t(rowBegin)),
+                              image.pixels.begin() + long(rowFloats * size_t(rowEnd)));
+}
+
+}  // namespace
+
+SceneUnits planSceneUnits(const BakeJob& job, int bands, int cameras) {
+    SceneUnits units;
+    const BakeSettings& s = job.settings;
+    if (s.outputs.lightmaps) {
+        double largest = double(s.lightmap.width) * s.lightmap.height;
+        for (const AtlasGroup& group : s.lightmap.atlases)
+            largest = std::max(largest, double(group.width) * group.height);
+        units.lightmapBands = bands > 0 ? bands : std::max(1, static_cast<int>(std::ceil(largest / kTexelsPerBand)));
+    }
+    if (s.outputs.images)
+        units.cameras = cameras >= 0 ? cameras : static_cast<int>(bakeCameras(loadJobScene(job), s).size());
+    return units;
+}
+
+std::string receiverName(const SceneUnits& units, int receiver) {
+    if (receiver < units.lightmapBands)
+        return "lightmap " + std::to_string(receiver) + " of " + std::to_string(units.lightmapBands);
+    return "camera " + std::to_string(receiver - units.lightmapBands);
+}
+
+std::string receiverFolder(const SceneUnits& units, int receiver) {
+    if (receiver < units.lightmapBands)
+        return "lightmap-" + std::to_string(receiver) + "-of-" + std::to_string(units.lightmapBands);
+    return "camera-" + std::to_string(receiver - units.lightmapBands);
+}
+
+std::optional<UnitRecord> readUnitRecord(const std::string& unitFolder) {
+    std::ifstream in(fs::path(unitFolder) / kRecordFile);
+    if (!in) return std::nullopt;
+    json j;
+    try {
+        in >> j;
+        UnitRecord record;
+        record.ok = j.at("ok").get<bool>();
+        record.error = j.at("error").get<std::string>();
+        record.seconds = j.at("seconds").get<double>();
+        record.host = j.at("host").get<std::string>();
+        record.slurmJob = j.at("slurm_job").get<std::string>();
+        record.peakMemoryBytes = j.at("peak_memory_bytes").get<long>();
+        return record;
+    } catch (const std::exception& e) {
+        UnitRecord record;
+        record.error = unitFolder + "/unit.json cannot be read: " + e.what();
+        return record;
+    }
+}
+
+UnitRecord runVoxelUnit(const BakeJob& job, const std::string& sceneWork) {
+    return runUnit(sceneWork, kVoxelFolder, [&](const fs::path& dir, UnitRecord& record) {
+        const BakeSettings& settings = job.settings;
+        validateBakeSettings(settings);
+        Diagnostics diagnostics(settings.strict);
+        const auto loadStart = std::chrono::steady_clock::now();
+        Scene scene = loadJobScene(job);
+        const double loadSeconds = secondsSince(loadStart);
+        const size_t triangles = scene.triangleCount();
+        const std::vector<std::string> sceneWarnings = scene.warnings;
+        const VoxelStages stages = bakeVoxelStages(scene, settings, diagnostics);
+        writeVoxelState(stages, triangles, sceneWarnings, loadSeconds, diagnostics.warnings(),
+                        (dir / kStateFile).string());
+        record.seconds = loadSeconds + totalSeconds(stages.result.stages);
+    });
+}
+
+UnitRecord runReceiverUnit(const BakeJob& job, const std::string& sceneWork, const SceneUnits& units, int receiver) {
+    if (receiver < 0 || receiver >= units.receiverCount())
+        throw SettingsError("receiver unit " + std::to_string(receiver) + " of a scene with " +
+                            std::to_string(units.receiverCount()));
+    return runUnit(sceneWork, receiverFolder(units, receiver), [&](const fs::path& dir, UnitRecord& record) {
+        const BakeSettings& settings = job.settings;
+        const VoxelState state = finishedVoxelState(sceneWork);
+        const auto start = std::chrono::steady_clock::now();
+        const Scene scene = receiverScene(loadJobScene(job), state);
+        const RebuiltGather gather = rebuildGather(state);
+        const ReceiverScene tracing(scene);
+        const ReceiverShading shading(tracing, gather.mips, gather.cache, settings, state.onGpu);
+        UnitFile file;
+        if (receiver < units.lightmapBands) {
+            Diagnostics ignored(false, false);  // the merge reports the atlases' warnings once
+            for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, state.lightmap, ignored)) {
+                const auto [rowBegin, rowEnd] = bandRows(atlas.receivers.height, receiver, units.lightmapBands);
+                const ReceiverLighting lit = shading.shadeAtlasRows(atlas, rowBegin, rowEnd);
+                file.header["atlases"].push_back({{"name", atlas.name},
+                                                  {"width", atlas.receivers.width},
+                                                  {"height", atlas.receivers.height},
+                                                  {"row_begin", rowBegin},
+                                                  {"row_end", rowEnd}});
+                file.add(rows(lit.direct, rowBegin, rowEnd));
+                file.add(rows(lit.indirect, rowBegin, rowEnd));
+            }
+            file.header["kind"] = "lightmap band";
+            writeUnitFile(file, (dir / kBandFile).string());
+        } else {
+            const std::vector<Camera> cameras = bakeCameras(scene, settings);
+            const size_t c = size_t(receiver - units.lightmapBands);
+            if (c >= cameras.size())
+                throw InputError(job.scenePath + ": has " + std::to_string(cameras.size()) + " cameras, not " +
+                                 std::to_string(c + 1) + ": the scene changed since the job was submitted");
+            const BakedImage image = shading.shadeCamera(cameras[c]);
+            file.header = {{"kind", "camera image"},
+                           {"camera", image.camera},
+                           {"width", image.beauty.width},
+                           {"height", image.beauty.height}};
+            for (const Image* i : {&image.beauty, &image.direct, &image.indirect, &image.albedo}) file.add(i->pixels);
+            writeUnitFile(file, (dir / kImageFile).string());
+        }
+        record.seconds = secondsSince(start);
+    });
+}
+
+BakeReport mergeScene(const BakeJob& job, const std::string& sceneWork, const SceneUnits& units) {
+    return publishBake(job, [&](BakeReport& report, const std::string& staging) {
+        // A failed unit fails the scene with its own error: the voxel unit's first, then the
+        // receivers' in the order a local bake shades them.
+        std::vector<UnitRecord> records;
+        for (int r = -1; r < units.receiverCount(); ++r) {
+            const std::string name = r < 0 ? "voxel" : receiverName(units, r);
+            const fs::path folder = fs::path(sceneWork) / (r < 0 ? std::string(kVoxelFolder) : receiverFolder(units, r));
+            const std::optional<UnitRecord> record = readUnitRecord(folder.string());
+            if (!record)
+                throw Error("the " + name + " unit left no result in " + folder.string() +
+                            " (killed, out of time, or its node failed: see its log)");
+            if (!record->ok) throw Error(r < 0 ? record->error : "the " + name + " unit: " + record->error);
+            records.push_back(*record);
+        }
+        VoxelState state = finishedVoxelState(sceneWork);
+        report.stages.push_back({"load", state.loadSeconds});
+        report.triangles = state.triangles;
+        report.warnings = state.sceneWarnings;
+        Diagnostics diagnostics(job.settings.strict, false);
+        for (const std::string& warning : state.stageWarnings) diagnostics.warn(warning);
+
+        Scene loaded = loadJobScene(job);
+        const ExportSource source = exportSourceOf(loaded);
+        const Scene scene = receiverScene(std::move(loaded), state);
+        BakeResult result = std::move(state.result);
+        report.stages.insert(report.stages.end(), result.stages.begin(), result.stages.end());
+        result.mips = buildRadianceMips(result.voxels);
+
+        double lightmapSeconds = 0.0, imageSeconds = 0.0;
+        if (units.lightmapBands > 0) {
+            const std::vector<LightmapAtlas> atlases = buildLightmapReceivers(scene, state.lightmap, diagnostics);
+            std::vector<Image> direct, indirect;
+            for (const LightmapAtlas& atlas : atlases) {
+                direct.emplace_back(atlas.receivers.width, atlas.receivers.height, 3);
+                indirect.emplace_back(atlas.receivers.width, atlas.receivers.height, 3);
+            }
+            for (int band = 0; band < units.lightmapBands; ++band) {
+                const std::string path = (fs::path(sceneWork) / receiverFolder(units, band) / kBandFile).string();
+                const UnitFile file = readUnitFile(path);
+                const json& list = file.header.at("atlases");
+                if (list.size() != atlases.size())
+                    throw InputError(path + ": " + std::to_string(list.size()) + " atlases, the scene has " +
+                                     std::to_string(atlases.size()));
+                for (size_t a = 0; a < atlases.size(); ++a) {
+                    const auto [rowBegin, rowEnd] = bandRows(atlases[a].receivers.height, band, units.lightmapBands);
+                    if (list[a].at("name") != atlases[a].name || list[a].at("row_begin") != rowBegin ||
+                        list[a].at("row_end") != rowEnd || list[a].at("width") != atlases[a].receivers.width)
+                        throw InputError(path + ": atlas " + std::to_string(a) + " is not the scene's '" +
+                                         atlases[a].name + "' rows " + std::to_string(rowBegin) + "-" +
+                                         std::to_string(rowEnd));
+                    const size_t offset = size_t(rowBegin) * size_t(atlases[a].receivers.width) * 3;
+                    const size_t floats = size_t(rowEnd - rowBegin) * size_t(atlases[a].receivers.width) * 3;
+                    const std::vector<float> d = file.take<float>(2 * a, path), i = file.take<float>(2 * a + 1, path);
+                    if (d.size() != floats || i.size() != floats) throw InputError(path + ": a band of the wrong size");
+                    std::copy(d.begin(), d.end(), direct[a].pixels.begin() + long(offset));
+                    std::copy(i.begin(), i.end(), indirect[a].pixels.begin() + long(offset));
+                }
+                lightmapSeconds += records[size_t(band) + 1].seconds;
+            }
+            for (size_t a = 0; a < atlases.size(); ++a)
+                result.lightmaps.push_back(finishLightmap(atlases[a], direct[a], indirect[a]));
+        }
+        for (int c = 0; c < units.cameras; ++c) {
+            const int r = units.lightmapBands + c;
+            const std::string path = (fs::path(sceneWork) / receiverFolder(units, r) / kImageFile).string();
+            const UnitFile file = readUnitFile(path);
+            const int width = file.header.at("width").get<int>(), height = file.header.at("height").get<int>();
+            BakedImage image;
+            image.camera = file.header.at("camera").get<std::string>();
+            Image* parts[] = {&image.beauty, &image.direct, &image.indirect, &image.albedo};
+            for (size_t k = 0; k < 4; ++k) {
+                *parts[k] = Image(width, height, 3);
+                parts[k]->pixels = file.take<float>(k, path);
+                if (parts[k]->pixels.size() != size_t(width) * size_t(height) * 3)
+                    throw InputError(path + ": an image of the wrong size");
+            }
+            result.images.push_back(std::move(image));
+            imageSeconds += records[size_t(r) + 1].seconds;
+        }
+        if (units.lightmapBands > 0) report.stages.push_back({"lightmaps", lightmapSeconds});
+        if (units.cameras > 0) report.stages.push_back({"images", imageSeconds});
+        for (const UnitRecord& record : records)
+            report.peakMemoryBytes = std::max(report.peakMemoryBytes, record.peakMemoryBytes);
+        writeBakeFiles(job, result, source, report, staging, diagnostics);
+    });
+}
+
+}  // namespace vl::cluster

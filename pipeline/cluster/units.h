@@ -1,0 +1,67 @@
+// A bake split into units that run as separate processes, on one machine or on many that
+// share a folder (cluster/slurm.h submits them to Slurm). Per scene:
+//   voxel           the voxel stages (bake.h bakeVoxelStages) → voxel-state.vxu (voxel_state.h)
+//   lightmap t of T rows [t·H/T, (t+1)·H/T) of every atlas of the scene, whatever size the
+//                   atlas turns out to have → band.vxu
+//   camera c        one camera image → image.vxu
+//   merge           every unit's result → the scene's output folder, written by the function a
+//                   local bake writes with (bake_job.h writeBakeFiles), under its lock
+// Results are the same bytes as a local bake: every receiver sample seeds its generator with
+// its index in its whole atlas or image, no value is summed across units, and the padding of
+// an atlas is dilated only once all its bands are in.
+//
+// Each unit writes into <unit>.partial-<host>-<pid> beside its folder and renames it when
+// done; unit.json says whether it succeeded and why not. A unit whose folder holds an ok
+// unit.json is done: a second run of the job runs only the others.
+#pragma once
+
+#include "bake/bake_job.h"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vl::cluster {
+
+// Texels a lightmap band is given at most, where the job does not set the number of bands.
+constexpr double kTexelsPerBand = 1024.0 * 1024.0;
+
+struct SceneUnits {
+    int lightmapBands = 0;  // 0 when the job writes no lightmaps
+    int cameras = 0;        // 0 when it writes no images
+    int receiverCount() const { return lightmapBands + cameras; }
+};
+
+// The units of a job's scene: the bands (`bands` > 0, else one per kTexelsPerBand texels of its
+// largest atlas) and the cameras (`cameras` >= 0, else the scene is loaded to count them:
+// throws what loading throws).
+SceneUnits planSceneUnits(const BakeJob& job, int bands, int cameras = -1);
+
+// "voxel", "lightmap 2 of 4", "camera 0": receiver index i counts the bands first.
+std::string receiverName(const SceneUnits& units, int receiver);
+// The unit's folder name inside the scene's work folder.
+std::string receiverFolder(const SceneUnits& units, int receiver);
+constexpr const char* kVoxelFolder = "voxel";
+
+struct UnitRecord {
+    bool ok = false;
+    std::string error;
+    double seconds = 0.0;  // the unit's own work (its stage for receivers)
+    std::string host;
+    std::string slurmJob;  // "JOBID" or "ARRAYJOB_TASK" when Slurm ran it
+    long peakMemoryBytes = 0;
+};
+
+// unit.json of a finished unit's folder; nothing while the unit has not finished.
+std::optional<UnitRecord> readUnitRecord(const std::string& unitFolder);
+
+// Each runs one unit into `sceneWork`/<its folder> and returns its record; a failure is
+// recorded in the folder, not thrown.
+UnitRecord runVoxelUnit(const BakeJob& job, const std::string& sceneWork);
+UnitRecord runReceiverUnit(const BakeJob& job, const std::string& sceneWork, const SceneUnits& units, int receiver);
+
+// The scene's outputs from its units' results, as runBake reports them; a failed or missing
+// unit fails the scene with that unit's error (the first in the order of a local bake).
+BakeReport mergeScene(const BakeJob& job, const std::string& sceneWork, const SceneUnits& units);
+
+}  // namespace vl::cluster

@@ -1,0 +1,232 @@
+#include "cluster/voxel_state.h"
+
+#include "cluster/unit_file.h"
+#include "bake/gather_visibility.h"
+#include "core/error.h"
+#include "voxel/voxelize.h"
+
+namespace vl::cluster {
+namespace {
+
+using nlohmann::json;
+
+json atlasJson(const AtlasGroup& group) {
+    return {{"name", group.name},   {"meshes", group.meshes}, {"mesh_indices", group.meshIndices},
+            {"width", group.width}, {"height", group.height}, {"origin", group.origin}};
+}
+
+AtlasGroup atlasFrom(const json& j) {
+    AtlasGroup group;
+    group.name = j.at("name").get<std::string>();
+    group.meshes = j.at("meshes").get<std::vector<std::string>>();
+    group.meshIndices = j.at("mesh_indices").get<std::vector<uint32_t>>();
+    group.width = j.at("width").get<int>();
+    group.height = j.at("height").get<int>();
+    group.origin = j.at("origin").get<std::string>();
+    return group;
+}
+
+// The arrays in the order they are stored.
+enum Array { kCoords, kAlbedo, kNormal, kAxisWeights, kEmission, kSurfaceOffset, kOpacity, kSolid, kRadiance,
+             kFaceRadiance, kOcclusion, kIrradiance, kFirstLayout };
+
+}  // namespace
+
+void writeVoxelState(const VoxelStages& stages, size_t triangles, const std::vector<std::string>& sceneWarnings,
+                     double loadSeconds, const std::vector<std::string>& stageWarnings, const std::string& path) {
+    const BakeResult& r = stages.result;
+    const VoxelScene& v = r.voxels;
+    UnitFile file;
+    json& h = file.header;
+    h["kind"] = "voxel state";
+    h["tool_version"] = VOXLIGHT_VERSION;
+    h["voxel_size"] = v.voxelSize;
+    h["origin"] = {v.origin.x, v.origin.y, v.origin.z};
+    const VoxelSizeChoice& c = r.voxelSizeChoice;
+    h["choice"] = {{"voxel_size", c.voxelSize}, {"along_longest", c.voxelsAlongLongest}, {"set_by", c.setBy},
+                   {"warnings", c.warnings}};
+    for (const LightClearance& clearance : c.clearances)
+        h["choice"]["clearances"].push_back({{"light", clearance.light}, {"metres", clearance.metres}});
+    for (const StageTime& s : r.stages) h["stages"].push_back({{"stage", s.stage}, {"seconds", s.seconds}});
+    h["gather_points"] = r.gatherPoints;
+    h["bright_patches"] = r.brightPatches;
+    h["gather_visibility"] = {{"visibility", toString(r.gatherVisibility.visibility)},
+                              {"set_by", r.gatherVisibility.setBy},
+                              {"probe_hits", r.gatherVisibility.probe.hits},
+                              {"probe_backs", r.gatherVisibility.probe.singleSidedBacks}};
+    if (r.lightmapUvs) {
+        const LightmapUvReport& u = *r.lightmapUvs;
+        h["lightmap_uvs"] = {{"width", u.width},         {"height", u.height},           {"meshes", u.meshes},
+                             {"charts", u.charts},       {"texel_size", u.texelSize},    {"occupancy", u.occupancy},
+                             {"max_stretch", u.maxStretch}, {"mean_stretch", u.meanStretch}, {"seconds", u.seconds}};
+    }
+    h["lightmap"] = {{"width", stages.lightmap.width}, {"height", stages.lightmap.height}, {"atlases", json::array()}};
+    for (const AtlasGroup& group : stages.lightmap.atlases) h["lightmap"]["atlases"].push_back(atlasJson(group));
+    h["gathered"] = r.gatherPoints > 0;
+    h["gather_level"] = stages.cache.level();
+    h["on_gpu"] = stages.onGpu;
+    h["triangles"] = triangles;
+    h["load_seconds"] = loadSeconds;
+    h["scene_warnings"] = sceneWarnings;
+    h["stage_warnings"] = stageWarnings;
+    h["mesh_count"] = r.generatedLayouts.size();
+
+    file.add(v.coords);
+    file.add(v.albedo);
+    file.add(v.normal);
+    file.add(v.axisWeights);
+    file.add(v.emission);
+    file.add(v.surfaceOffset);
+    file.add(v.opacity);
+    file.add(v.solid);
+    file.add(v.radiance);
+    file.add(v.faceRadiance);
+    file.add(v.occlusion);
+    file.add(stages.cache.irradiance());
+    // Per mesh, the layout glTF out writes: its source, and for meshes given generated UVs
+    // their split vertices (indices into the primitive), uv1 and triangles.
+    for (const GeneratedLayout& layout : r.generatedLayouts) {
+        h["layouts"].push_back({{"mesh", layout.source.mesh},
+                                {"primitive", layout.source.primitive},
+                                {"node", layout.source.node},
+                                {"mirrored", layout.source.mirrored}});
+        file.add(layout.source.vertices);
+        file.add(layout.uv1);
+        file.add(layout.indices);
+    }
+    writeUnitFile(file, path);
+}
+
+VoxelState readVoxelState(const std::string& path) {
+    const UnitFile file = readUnitFile(path);
+    const json& h = file.header;
+    if (h.value("kind", "") != "voxel state") throw InputError(path + ": not a voxel state");
+    if (h.value("tool_version", "") != VOXLIGHT_VERSION)
+        throw InputError(path + ": written by voxlight " + h.value("tool_version", "?") + ", this is " + VOXLIGHT_VERSION);
+    VoxelState state;
+    BakeResult& r = state.result;
+    VoxelScene& v = r.voxels;
+    v.voxelSize = h.at("voxel_size").get<double>();
+    v.origin = glm::dvec3(h.at("origin")[0].get<double>(), h.at("origin")[1].get<double>(), h.at("origin")[2].get<double>());
+    const json& c = h.at("choice");
+    r.voxelSizeChoice.voxelSize = c.at("voxel_size").get<double>();
+    r.voxelSizeChoice.voxelsAlongLongest = c.at("along_longest").get<int>();
+    r.voxelSizeChoice.setBy = c.at("set_by").get<std::string>();
+    r.voxelSizeChoice.warnings = c.at("warnings").get<std::vector<std::string>>();
+    if (c.contains("clearances"))
+        for (const json& clearance : c["clearances"])
+            r.voxelSizeChoice.clearances.push_back({clearance.at("light").get<std::string>(), clearance.at("metres").get<double>()});
+    if (h.contains("stages"))
+        for (const json& s : h["stages"]) r.stages.push_back({s.at("stage").get<std::string>(), s.at("seconds").get<double>()});
+    r.gatherPoints = h.at("gather_points").get<size_t>();
+    r.brightPatches = h.at("bright_patches").get<size_t>();
+    const json& g = h.at("gather_visibility");
+    r.gatherVisibility.visibility = parseGatherVisibility(g.at("visibility").get<std::string>());
+    r.gatherVisibility.setBy = g.at("set_by").get<std::string>();
+    r.gatherVisibility.probe.hits = g.at("probe_hits").get<uint64_t>();
+    r.gatherVisibility.probe.singleSidedBacks = g.at("probe_backs").get<uint64_t>();
+    if (h.contains("lightmap_uvs")) {
+        const json& u = h["lightmap_uvs"];
+        LightmapUvReport uvs;
+        uvs.width = u.at("width").get<int>();
+        uvs.height = u.at("height").get<int>();
+        uvs.meshes = u.at("meshes").get<size_t>();
+        uvs.charts = u.at("charts").get<size_t>();
+        uvs.texelSize = u.at("texel_size").get<double>();
+        uvs.occupancy = u.at("occupancy").get<double>();
+        uvs.maxStretch = u.at("max_stretch").get<double>();
+        uvs.meanStretch = u.at("mean_stretch").get<double>();
+        uvs.seconds = u.at("seconds").get<double>();
+        r.lightmapUvs = uvs;
+    }
+    state.lightmap.width = h.at("lightmap").at("width").get<int>();
+    state.lightmap.height = h.at("lightmap").at("height").get<int>();
+    for (const json& group : h.at("lightmap").at("atlases")) state.lightmap.atlases.push_back(atlasFrom(group));
+    state.gathered = h.at("gathered").get<bool>();
+    state.gatherLevel = h.at("gather_level").get<int>();
+    state.onGpu = h.at("on_gpu").get<bool>();
+    state.triangles = h.at("triangles").get<size_t>();
+    state.loadSeconds = h.at("load_seconds").get<double>();
+    state.sceneWarnings = h.at("scene_warnings").get<std::vector<std::string>>();
+    state.stageWarnings = h.at("stage_warnings").get<std::vector<std::string>>();
+
+    v.coords = file.take<ivec3>(kCoords, path);
+    v.albedo = file.take<vec3>(kAlbedo, path);
+    v.normal = file.take<vec3>(kNormal, path);
+    v.axisWeights = file.take<AxisWeights>(kAxisWeights, path);
+    v.emission = file.take<vec3>(kEmission, path);
+    v.surfaceOffset = file.take<vec3>(kSurfaceOffset, path);
+    v.opacity = file.take<float>(kOpacity, path);
+    v.solid = file.take<uint8_t>(kSolid, path);
+    v.radiance = file.take<vec3>(kRadiance, path);
+    v.faceRadiance = file.take<FaceRadiance>(kFaceRadiance, path);
+    v.occlusion = file.take<float>(kOcclusion, path);
+    state.gatheredIrradiance = file.take<vec3>(kIrradiance, path);
+    const size_t meshes = h.at("mesh_count").get<size_t>();
+    for (size_t m = 0; m < meshes; ++m) {
+        const json& l = h.at("layouts").at(m);
+        GeneratedLayout layout;
+        layout.source.mesh = l.at("mesh").get<int>();
+        layout.source.primitive = l.at("primitive").get<int>();
+        layout.source.node = l.at("node").get<int>();
+        layout.source.mirrored = l.at("mirrored").get<bool>();
+        layout.source.vertices = file.take<uint32_t>(kFirstLayout + 3 * m, path);
+        layout.uv1 = file.take<vec2>(kFirstLayout + 3 * m + 1, path);
+        layout.indices = file.take<uint32_t>(kFirstLayout + 3 * m + 2, path);
+        r.generatedLayouts.push_back(std::move(layout));
+    }
+    const size_t n = v.coords.size();
+    for (size_t size : {v.albedo.size(), v.normal.size(), v.axisWeights.size(), v.opacity.size(), v.solid.size(),
+                        v.radiance.size(), v.faceRadiance.size()})
+        if (size != n) throw InputError(path + ": its voxel channels differ in length");
+    return state;
+}
+
+Scene receiverScene(Scene loaded, const VoxelState& state) {
+    Scene scene = std::move(loaded);
+    anchorToVoxelGrid(scene, state.result.voxels.voxelSize);
+    const std::vector<GeneratedLayout>& layouts = state.result.generatedLayouts;
+    if (!layouts.empty() && layouts.size() != scene.meshes.size())
+        throw InputError(scene.sourcePath + ": has " + std::to_string(scene.meshes.size()) +
+                         " meshes, the voxel unit's state " + std::to_string(layouts.size()) + ": the scene changed");
+    for (size_t m = 0; m < layouts.size(); ++m) {
+        const GeneratedLayout& layout = layouts[m];
+        if (layout.uv1.empty()) continue;
+        // The generated UVs split vertices: vertex k is the loaded mesh's vertex vertices[k].
+        const Mesh& original = scene.meshes[m];
+        Mesh mesh = original;
+        mesh.positions.clear();
+        mesh.normals.clear();
+        mesh.uv0.clear();
+        mesh.colors.clear();
+        for (uint32_t old : layout.source.vertices) {
+            if (old >= original.positions.size())
+                throw InputError(scene.sourcePath + ": mesh '" + original.name + "' changed since its voxel unit ran");
+            mesh.positions.push_back(original.positions[old]);
+            if (!original.normals.empty()) mesh.normals.push_back(original.normals[old]);
+            if (!original.uv0.empty()) mesh.uv0.push_back(original.uv0[old]);
+            if (!original.colors.empty()) mesh.colors.push_back(original.colors[old]);
+        }
+        mesh.source.vertices = layout.source.vertices;
+        mesh.uv1 = layout.uv1;
+        mesh.indices = layout.indices;
+        scene.meshes[m] = std::move(mesh);
+    }
+    return scene;
+}
+
+RebuiltGather rebuildGather(const VoxelState& state) {
+    RebuiltGather gather;
+    gather.mips = buildRadianceMips(state.result.voxels);
+    if (state.gathered) {
+        gather.cache = IrradianceCache(state.result.voxels, state.gatherLevel);
+        gather.cache.link(gather.mips.view());
+        if (state.gatheredIrradiance.size() != gather.cache.points().size())
+            throw InputError("the voxel unit's state holds " + std::to_string(state.gatheredIrradiance.size()) +
+                             " gathered points, its voxels give " + std::to_string(gather.cache.points().size()));
+        gather.cache.setIrradiance(state.gatheredIrradiance);
+    }
+    return gather;
+}
+
+}  // namespace vl::cluster

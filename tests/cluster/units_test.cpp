@@ -1,0 +1,118 @@
+// A bake split into units (cluster/units.h) and run unit by unit in this process writes the
+// same bytes as the local bake of the same job; a failed unit fails its scene with its error.
+#include "bake/job_file.h"
+#include "cluster/units.h"
+#include "cluster/voxel_state.h"
+#include "core/error.h"
+#include "support/paths.h"
+#include "cluster/three_scenes.h"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+using namespace vl;
+using namespace vl::cluster;
+namespace fs = std::filesystem;
+
+
+TEST_CASE("A bake run unit by unit writes the same bytes as the local bake", "[cluster]") {
+    const fs::path root = test::tempDir("cluster-units");
+    fs::remove_all(root);
+    BakeSettings defaults;
+    defaults.quiet = true;
+    std::vector<BakeJob> jobs = readJobFile(test::writeThreeSceneJob(root).string(), defaults, (root / "out").string());
+    REQUIRE(jobs.size() == 3);
+    size_t compared = 0;
+    for (size_t k = 0; k < jobs.size(); ++k) {
+        BakeJob local = jobs[k];
+        local.outputDir = (root / "local" / std::to_string(k)).string();
+        const BakeReport expected = runBake(local);
+        INFO(jobs[k].scenePath << ": " << expected.error);
+        REQUIRE(expected.ok);
+
+        BakeJob split = jobs[k];
+        split.outputDir = (root / "split" / std::to_string(k)).string();
+        const std::string work = (root / "work" / std::to_string(k)).string();
+        // Three bands: more than one per atlas, and rows that do not divide evenly.
+        const SceneUnits units = planSceneUnits(split, 3);
+        CHECK(units.lightmapBands == 3);
+        CHECK(units.cameras == (k == 2 ? 2 : 1));
+        REQUIRE(runVoxelUnit(split, work).ok);
+        for (int r = units.receiverCount() - 1; r >= 0; --r) {
+            const UnitRecord record = runReceiverUnit(split, work, units, r);
+            INFO(receiverName(units, r) << ": " << record.error);
+            REQUIRE(record.ok);
+        }
+        const BakeReport merged = mergeScene(split, work, units);
+        INFO(merged.error);
+        REQUIRE(merged.ok);
+        CHECK(merged.files == expected.files);
+        compared += test::checkSameOutputs(local.outputDir, split.outputDir, expected.files);
+    }
+    CHECK(compared >= 3 * 12);
+}
+
+TEST_CASE("A failed unit fails its scene's merge with its error, and the output folder is left alone", "[cluster]") {
+    const fs::path root = test::tempDir("cluster-failed-unit");
+    fs::remove_all(root);
+    BakeJob job;
+    job.scenePath = test::sourceDir() + "/scenes/cornell_box.gltf";
+    job.outputDir = (root / "out").string();
+    job.settings.quiet = true;
+    job.settings.voxel.resolution = 16;
+    job.settings.lightmap.width = job.settings.lightmap.height = 16;
+    const std::string work = (root / "work").string();
+    const SceneUnits units = planSceneUnits(job, 2);
+    REQUIRE(runVoxelUnit(job, work).ok);
+    REQUIRE(runReceiverUnit(job, work, units, 0).ok);
+
+    // Receiver 1 never ran: the merge names it and publishes nothing.
+    BakeReport report = mergeScene(job, work, units);
+    CHECK_FALSE(report.ok);
+    CHECK_THAT(report.error, Catch::Contains("lightmap 1 of 2") && Catch::Contains("left no result"));
+    CHECK_FALSE(fs::exists(job.outputDir + "/bake.json"));
+
+    // A voxel unit whose scene is missing: its own error, as a local bake gives it.
+    BakeJob missing = job;
+    missing.scenePath = (root / "missing.gltf").string();
+    const UnitRecord failed = runVoxelUnit(missing, (root / "work-missing").string());
+    CHECK_FALSE(failed.ok);
+    const BakeReport local = runBake(missing);
+    CHECK(failed.error == local.error);
+    report = mergeScene(missing, (root / "work-missing").string(), units);
+    CHECK_FALSE(report.ok);
+    CHECK(report.error == local.error);
+    // The receivers of a failed voxel unit fail with its error too, and record it.
+    const UnitRecord receiver = runReceiverUnit(missing, (root / "work-missing").string(), units, 0);
+    CHECK_FALSE(receiver.ok);
+    CHECK(receiver.error == local.error);
+    REQUIRE(readUnitRecord((root / "work-missing" / "lightmap-0-of-2").string()));
+}
+
+TEST_CASE("A damaged voxel state is refused, naming the file", "[cluster]") {
+    const fs::path root = test::tempDir("cluster-damaged");
+    fs::remove_all(root);
+    BakeJob job;
+    job.scenePath = test::sourceDir() + "/scenes/cornell_box.gltf";
+    job.outputDir = (root / "out").string();
+    job.settings.quiet = true;
+    job.settings.voxel.resolution = 16;
+    job.settings.lightmap.width = job.settings.lightmap.height = 16;
+    const std::string work = (root / "work").string();
+    REQUIRE(runVoxelUnit(job, work).ok);
+    const fs::path state = fs::path(work) / "voxel" / "voxel-state.vxu";
+    std::string data = test::fileBytes(state);
+    REQUIRE(data.size() > 1000);
+    data[data.size() / 2] ^= 0x20;
+    std::ofstream(state, std::ios::binary) << data;
+    CHECK_THROWS_WITH(readVoxelState(state.string()), Catch::Contains(state.string()) && Catch::Contains("damaged"));
+    const UnitRecord receiver = runReceiverUnit(job, work, planSceneUnits(job, 1), 0);
+    CHECK_FALSE(receiver.ok);
+    CHECK_THAT(receiver.error, Catch::Contains("damaged"));
+    std::ofstream(state, std::ios::binary) << data.substr(0, 100);
+    CHECK_THROWS_WITH(readVoxelState(state.string()), Catch::Contains(state.string()));
+}
