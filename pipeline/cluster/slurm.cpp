@@ -401,7 +401,7 @@ std::vector<std::string> slurmStatus(const std::string& outputRoot) {
         const std::optional<UnitRecord> record = readUnitRecord(folder);
         if (record) {
             char seconds[32];
-            std::snprintf(seconds, sizeof seconds, "%.2f s", record->seconds);
+            std::snprintf(seconds, sizeof seconds, "%.2f s", record->wallSeconds);
             return record->ok ? "done on " + record->host + " in " + seconds : "failed: " + record->error;
         }
         if (!submitted) return "not submitted";
@@ -471,12 +471,15 @@ json readSummary(const std::string& workDir) {
     return j;
 }
 
-void writeSummary(const std::string& workDir, const std::vector<BakeReport>& reports) {
+void writeSummary(const std::string& workDir, const std::vector<BakeReport>& reports,
+                  const std::vector<double>& mergeSeconds) {
     json j;
     j["scenes"] = json::array();
-    for (const BakeReport& r : reports)
+    for (size_t k = 0; k < reports.size(); ++k) {
+        const BakeReport& r = reports[k];
         j["scenes"].push_back({{"scene", r.scenePath}, {"output", r.outputDir}, {"ok", r.ok}, {"error", r.error},
-                               {"seconds", r.totalSeconds()}});
+                               {"seconds", r.totalSeconds()}, {"merge_seconds", mergeSeconds.at(k)}});
+    }
     const fs::path path = fs::path(workDir) / kSummaryFile;
     const fs::path temp = path.string() + ".tmp";
     {

@@ -82,6 +82,8 @@ bool waitForMerge(const ClusterPlan& plan, double pollSeconds = 1.0);
 // The merge's summary (written by the merge unit): per scene, ok or the error.
 constexpr const char* kSummaryFile = "summary.json";
 nlohmann::json readSummary(const std::string& workDir);
-void writeSummary(const std::string& workDir, const std::vector<BakeReport>& reports);
+// `mergeSeconds`: per scene, the merge's wall time for it.
+void writeSummary(const std::string& workDir, const std::vector<BakeReport>& reports,
+                  const std::vector<double>& mergeSeconds);
 
 }  // namespace vl::cluster

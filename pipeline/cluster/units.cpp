@@ -60,6 +60,7 @@ UnitRecord runUnit(const std::string& sceneWork, const std::string& folder, Work
     const fs::path target = fs::path(sceneWork) / folder;
     const fs::path staging =
         fs::path(sceneWork) / (folder + ".partial-" + record.host + "-" + std::to_string(::getpid()));
+    const auto start = std::chrono::steady_clock::now();
     fs::remove_all(staging);
     fs::create_directories(staging);
     try {
@@ -70,7 +71,9 @@ UnitRecord runUnit(const std::string& sceneWork, const std::string& folder, Work
         record.error = e.what();
     }
     record.peakMemoryBytes = peakResidentBytes();
+    record.wallSeconds = secondsSince(start);
     const json j = {{"ok", record.ok},           {"error", record.error}, {"seconds", record.seconds},
+                    {"wall_seconds", record.wallSeconds},
                     {"host", record.host},       {"slurm_job", record.slurmJob},
                     {"peak_memory_bytes", record.peakMemoryBytes}};
     {
@@ -140,6 +143,7 @@ std::optional<UnitRecord> readUnitRecord(const std::string& unitFolder) {
         record.ok = j.at("ok").get<bool>();
         record.error = j.at("error").get<std::string>();
         record.seconds = j.at("seconds").get<double>();
+        record.wallSeconds = j.value("wall_seconds", record.seconds);
         record.host = j.at("host").get<std::string>();
         record.slurmJob = j.at("slurm_job").get<std::string>();
         record.peakMemoryBytes = j.at("peak_memory_bytes").get<long>();

@@ -24,7 +24,7 @@
 namespace vl::cluster {
 
 // Texels a lightmap band is given at most, where the job does not set the number of bands.
-constexpr double kTexelsPerBand = 1024.0 * 1024.0;
+constexpr double kTexelsPerBand = 512.0 * 512.0;
 
 struct SceneUnits {
     int lightmapBands = 0;  // 0 when the job writes no lightmaps
@@ -46,7 +46,8 @@ constexpr const char* kVoxelFolder = "voxel";
 struct UnitRecord {
     bool ok = false;
     std::string error;
-    double seconds = 0.0;  // the unit's own work (its stage for receivers)
+    double seconds = 0.0;      // its stages: what bake.json counts (a receiver: rebuilding the gather and shading)
+    double wallSeconds = 0.0;  // the whole unit, reading and writing its files included
     std::string host;
     std::string slurmJob;  // "JOBID" or "ARRAYJOB_TASK" when Slurm ran it
     long peakMemoryBytes = 0;

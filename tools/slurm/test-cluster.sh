@@ -213,6 +213,14 @@ NodeName=$host NodeAddr=127.0.0.1 CPUs=$cpus RealMemory=$mem State=UNKNOWN
 PartitionName=debug Nodes=$host Default=YES MaxTime=INFINITE State=UP OverSubscribe=NO
 EOF
     mv "$CONF.tmp" "$CONF"
+    # slurmd (22.05) detects the cgroup version from what is mounted on /sys/fs/cgroup and
+    # refuses to start where nothing is (a chroot, as the fresh-machine check runs in). The
+    # test cluster's plugins (proctrack/linuxproc, task/none) use no cgroup: name v1 there.
+    if [[ $(stat -f -c %T /sys/fs/cgroup 2>/dev/null) != @(tmpfs|cgroup2fs|cgroupfs) ]]; then
+        echo "CgroupPlugin=cgroup/v1" >"$D/cgroup.conf"
+    else
+        rm -f "$D/cgroup.conf"
+    fi
 }
 
 # ---- subcommands ------------------------------------------------------------------

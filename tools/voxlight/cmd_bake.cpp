@@ -132,7 +132,7 @@ void addBakeCommand(CLI::App& app) {
         ->check(CLI::NonNegativeNumber)
         ->group("Cluster");
     cmd->add_option("--lightmap-bands", options->slurmOptions.bands,
-                    "units per scene's lightmaps, each a band of rows of every atlas (0: one per 1024 x 1024 texels)")
+                    "units per scene's lightmaps, each a band of rows of every atlas (0: one per 512 x 512 texels of the largest atlas)")
         ->check(CLI::Range(0, 4096))
         ->group("Cluster");
     cmd->add_flag("--slurm-dry-run", options->slurmOptions.dryRun, "print the batch scripts and sbatch commands only")

@@ -9,6 +9,7 @@
 
 #include <tbb/global_control.h>
 
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
@@ -36,12 +37,15 @@ void runUnitCommand(const UnitOptions& options) {
                          std::to_string(plan.scenes.size()) + " when it was submitted: submit it again");
     if (options.unit == "merge") {
         std::vector<BakeReport> reports;
+        std::vector<double> seconds;
         for (size_t k = 0; k < jobs.size(); ++k) {
+            const auto start = std::chrono::steady_clock::now();
             reports.push_back(cluster::mergeScene(jobs[k], cluster::sceneWorkFolder(plan.workDir, k), plan.scenes[k].units));
+            seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
             if (!reports.back().ok) std::fprintf(stderr, "error: %s\n", reports.back().error.c_str());
         }
         printBakeSummary(reports);
-        cluster::writeSummary(plan.workDir, reports);
+        cluster::writeSummary(plan.workDir, reports, seconds);
         for (const BakeReport& r : reports)
             if (!r.ok) throw Error(std::to_string(reports.size()) + " scene(s) merged, at least one failed");
         return;
