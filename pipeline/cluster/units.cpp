@@ -187,6 +187,7 @@ UnitRecord runReceiverUnit(const BakeJob& job, const std::string& sceneWork, con
         UnitFile file;
         if (receiver < units.lightmapBands) {
             Diagnostics ignored(false, false);  // the merge reports the atlases' warnings once
+            file.header["atlases"] = json::array();  // a scene may bake no atlas at all
             for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, state.lightmap, ignored)) {
                 const auto [rowBegin, rowEnd] = bandRows(atlas.receivers.height, receiver, units.lightmapBands);
                 const ReceiverLighting lit = shading.shadeAtlasRows(atlas, rowBegin, rowEnd);

@@ -56,6 +56,32 @@ TEST_CASE("A bake run unit by unit writes the same bytes as the local bake", "[c
     CHECK(compared >= 3 * 12);
 }
 
+TEST_CASE("A scene whose lightmaps have no mesh to bake merges as its local bake", "[cluster]") {
+    // Khronos' MultiUVTest: its only mesh has a TEXCOORD_1 of its own use, and no atlas is baked.
+    VL_SKIP_WITHOUT_SHARED();
+    const fs::path root = test::tempDir("cluster-no-atlas");
+    fs::remove_all(root);
+    BakeJob job;
+    job.scenePath = test::sharedDir() + "/scenes/khronos-sample-assets/Models/MultiUVTest/glTF/MultiUVTest.gltf";
+    job.settings.quiet = true;
+    job.settings.voxel.resolution = 16;
+    job.settings.sky = vec3(0.5f);
+    job.outputDir = (root / "local").string();
+    const BakeReport local = runBake(job);
+    INFO(local.error);
+    REQUIRE(local.ok);
+    job.outputDir = (root / "split").string();
+    const std::string work = (root / "work").string();
+    const SceneUnits units = planSceneUnits(job, 2);
+    REQUIRE(runVoxelUnit(job, work).ok);
+    for (int r = 0; r < units.receiverCount(); ++r) REQUIRE(runReceiverUnit(job, work, units, r).ok);
+    const BakeReport merged = mergeScene(job, work, units);
+    INFO(merged.error);
+    REQUIRE(merged.ok);
+    CHECK(merged.files == local.files);
+    test::checkSameOutputs(root / "local", root / "split", local.files);
+}
+
 TEST_CASE("A failed unit fails its scene's merge with its error, and the output folder is left alone", "[cluster]") {
     const fs::path root = test::tempDir("cluster-failed-unit");
     fs::remove_all(root);

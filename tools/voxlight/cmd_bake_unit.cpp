@@ -1,6 +1,6 @@
 // voxlight bake-unit WORK --unit voxel|receiver|merge [--scene K] [--index I]: one unit of a
 // cluster bake (cluster/units.h), as the batch scripts `voxlight bake --slurm` writes run it.
-// Not for people: it has no description, so `voxlight --help` does not list it.
+// Not for people: its empty group keeps it out of `voxlight --help`.
 #include "tools/voxlight/commands.h"
 
 #include "cluster/slurm.h"
@@ -80,7 +80,8 @@ void runUnitCommand(const UnitOptions& options) {
 
 void addBakeUnitCommand(CLI::App& app) {
     auto options = std::make_shared<UnitOptions>();
-    auto* cmd = app.add_subcommand("bake-unit", "");
+    auto* cmd = app.add_subcommand("bake-unit", "the units of voxlight bake --slurm");
+    cmd->group("");  // hidden from voxlight --help: the batch scripts call it, not people
     cmd->add_option("work", options->work, "the cluster bake's work folder")->required();
     cmd->add_option("--unit", options->unit, "voxel, receiver or merge")->required();
     cmd->add_option("--scene", options->scene, "the scene's index in the job");
