@@ -61,6 +61,10 @@ UnitRecord runUnit(const std::string& sceneWork, const std::string& folder, Work
     const fs::path staging =
         fs::path(sceneWork) / (folder + ".partial-" + record.host + "-" + std::to_string(::getpid()));
     const auto start = std::chrono::steady_clock::now();
+    const auto unixSeconds = [] {
+        return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+    };
+    const double startedAt = unixSeconds();
     fs::remove_all(staging);
     fs::create_directories(staging);
     try {
@@ -74,6 +78,8 @@ UnitRecord runUnit(const std::string& sceneWork, const std::string& folder, Work
     record.wallSeconds = secondsSince(start);
     const json j = {{"ok", record.ok},           {"error", record.error}, {"seconds", record.seconds},
                     {"wall_seconds", record.wallSeconds},
+                    {"started_at", startedAt},  // Unix time: where the scheduler's gaps show
+                    {"ended_at", unixSeconds()},
                     {"host", record.host},       {"slurm_job", record.slurmJob},
                     {"peak_memory_bytes", record.peakMemoryBytes}};
     {
@@ -110,14 +116,29 @@ std::vector<float> rows(const Image& image, int rowBegin, int rowEnd) {
 SceneUnits planSceneUnits(const BakeJob& job, int bands, int cameras) {
     SceneUnits units;
     const BakeSettings& s = job.settings;
+    const bool generatesUvs = s.outputs.lightmaps && s.generateLightmapUvs && bands <= 0;
+    std::optional<Scene> scene;
+    if ((s.outputs.images && cameras < 0) || generatesUvs) scene = loadJobScene(job);
     if (s.outputs.lightmaps) {
         double largest = double(s.lightmap.width) * s.lightmap.height;
         for (const AtlasGroup& group : s.lightmap.atlases)
             largest = std::max(largest, double(group.width) * group.height);
+        // Generated lightmap UVs may need a larger atlas than the settings name (zdm2: 256² asked,
+        // 1024² needed): generating them here (deterministic, a second or two at most) sizes the
+        // bands as the bake will need them.
+        if (generatesUvs && scene) {
+            const MeshesWithoutUv1 without = sharedAtlasMeshesWithoutUv1(*scene, s.lightmap);
+            if (!without.meshes.empty()) {
+                Scene copy = *scene;
+                const LightmapUvReport uvs =
+                    generateLightmapUvs(copy, without.meshes, s.lightmap.width, s.lightmap.height);
+                largest = std::max(largest, double(uvs.width) * uvs.height);
+            }
+        }
         units.lightmapBands = bands > 0 ? bands : std::max(1, static_cast<int>(std::ceil(largest / kTexelsPerBand)));
     }
     if (s.outputs.images)
-        units.cameras = cameras >= 0 ? cameras : static_cast<int>(bakeCameras(loadJobScene(job), s).size());
+        units.cameras = cameras >= 0 ? cameras : static_cast<int>(bakeCameras(*scene, s).size());
     return units;
 }
 

@@ -33,8 +33,8 @@ struct SceneUnits {
 };
 
 // The units of a job's scene: the bands (`bands` > 0, else one per kTexelsPerBand texels of its
-// largest atlas) and the cameras (`cameras` >= 0, else the scene is loaded to count them:
-// throws what loading throws).
+// largest atlas, generated lightmap UVs' included) and the cameras (`cameras` >= 0, else
+// counted). Loads the scene where it needs to: throws what loading throws.
 SceneUnits planSceneUnits(const BakeJob& job, int bands, int cameras = -1);
 
 // "voxel", "lightmap 2 of 4", "camera 0": receiver index i counts the bands first.

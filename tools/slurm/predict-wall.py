@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""predict-wall.py WORK [--nodes 1,2,4,8,16,64] [--hop 1.0,3.0] [--task-start S] [--local S]
+"""predict-wall.py WORK [--nodes 1,2,4,8,16,64] [--tick 1.0,3.0] [--task-start S] [--submit S] [--local S]
 
 The wall time of a cluster bake on N nodes, predicted from the units one submission of it
 ran (WORK: the job's .voxlight-slurm folder: plan.json, each unit's unit.json, the merge's
@@ -8,17 +8,19 @@ summary.json). The model:
   * a node runs one unit at a time (units are submitted with --cpus-per-task = the node's
     cores), a unit takes its measured wall time (unit.json wall_seconds) plus a start-up cost
     (--task-start: Slurm launching the task and voxlight starting);
-  * a unit becomes eligible one scheduling hop (--hop) after what it depends on ended:
-    submission for the voxel units, its scene's voxel unit for a receiver, every unit for the
-    merge; eligible units start in submission order on the first free node;
+  * the job reaches Slurm --submit seconds after the command starts (planning: loading each
+    scene, generating lightmap UVs where the bake will);
+  * Slurm starts units only at its scheduling passes, every --tick seconds (1 s on the tuned
+    test cluster, about 3 s with Slurm's defaults: tools/slurm/DESIGN-NOTES.md section 6): a
+    unit starts at the first pass at which what it depends on has ended (its scene's voxel
+    unit, for a receiver; every unit, for the merge) and a node is free, in submission order;
   * the merge then takes the sum of its scenes' merge times (summary.json merge_seconds).
 
-Prints, per hop, the wall time on each node count, the speed-up over the local bake (--local:
-its seconds; default the sum of the units and the merge, one process), and the critical path
-(hop + slowest voxel unit + hop + slowest receiver after it + hop + merge) that no number of
-nodes goes below.
+Prints, per tick, the wall time on each node count and with a node for every unit, and the
+speed-up over the local bake (--local: its seconds; default the sum of the units and the
+merge, as one process would spend them).
 """
-import argparse, heapq, json, os, sys
+import argparse, heapq, json, math, os, sys
 
 
 def load(work):
@@ -41,40 +43,44 @@ def load(work):
     return scenes
 
 
-def simulate(scenes, nodes, hop, start):
+def on_tick(t, tick):
+    """The first scheduling pass at or after t."""
+    return math.ceil(t / tick - 1e-9) * tick
+
+
+def simulate(scenes, nodes, tick, start, submit):
+    """Wall seconds of the job on `nodes` nodes: every unit starts at the first scheduling pass
+    (every `tick` seconds) at which what it depends on has ended and a node is free, then takes
+    `start` (Slurm launching it, voxlight starting) and its measured time."""
     free = [0.0] * nodes  # when each node is next free
     heapq.heapify(free)
-    # Voxel units: eligible after one hop, in scene order.
+    # Voxel units first, in scene order, then every receiver in the order its voxel unit ends
+    # (arrays submitted per scene; a pass starts the eligible ones in submission order).
     voxel_end = []
     for s in scenes:
-        begin = max(hop, heapq.heappop(free))
+        begin = on_tick(max(submit, heapq.heappop(free)), tick)
         end = begin + start + s["voxel"]
         heapq.heappush(free, end)
         voxel_end.append(end)
-    # Receivers: eligible a hop after their voxel unit; started in submission order, each on
-    # the first free node. (Slurm's backfill may start a later-eligible unit earlier; greedy
-    # list scheduling in order is within a unit's time of it.)
-    pending = []
-    for k, s in enumerate(scenes):
-        for r, seconds in enumerate(s["receivers"]):
-            pending.append((voxel_end[k] + hop, k, r, seconds))
-    pending.sort()
+    pending = sorted((voxel_end[k], k, r, seconds)
+                     for k, s in enumerate(scenes) for r, seconds in enumerate(s["receivers"]))
     last = max(voxel_end)
-    for eligible, k, r, seconds in pending:
-        begin = max(eligible, heapq.heappop(free))
+    for ready, k, r, seconds in pending:
+        begin = on_tick(max(ready, heapq.heappop(free)), tick)
         end = begin + start + seconds
         heapq.heappush(free, end)
         last = max(last, end)
     merge = sum(s["merge"] for s in scenes)
-    return last + hop + start + merge
+    return on_tick(last, tick) + start + merge
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("work")
     ap.add_argument("--nodes", default="1,2,4,8,16,64")
-    ap.add_argument("--hop", default="1.0,3.0")
-    ap.add_argument("--task-start", type=float, default=0.05)
+    ap.add_argument("--tick", default="1.0,3.0")
+    ap.add_argument("--task-start", type=float, default=0.1)
+    ap.add_argument("--submit", type=float, default=1.0)
     ap.add_argument("--local", type=float, default=None)
     a = ap.parse_args()
     scenes = load(a.work)
@@ -87,16 +93,14 @@ def main():
     for s in scenes:
         rec = ", ".join(f"{t:.2f}" for t in s["receivers"])
         print(f"  {s['scene']}: voxel {s['voxel']:.2f} s, receivers [{rec}] s, merge {s['merge']:.2f} s")
-    print("| hop | " + " | ".join(f"{n} node{'s' if n > 1 else ''}" for n in nodes) + " | critical path |")
+    print("| pass every | " + " | ".join(f"{n} node{'s' if n > 1 else ''}" for n in nodes) + " | unlimited nodes |")
     print("|---|" + "---:|" * (len(nodes) + 1))
-    for hop in (float(h) for h in a.hop.split(",")):
+    for tick in (float(t) for t in a.tick.split(",")):
         cells = []
-        for n in nodes:
-            wall = simulate(scenes, n, hop, a.task_start)
+        for n in list(nodes) + [units]:
+            wall = simulate(scenes, n, tick, a.task_start, a.submit)
             cells.append(f"{wall:.1f} s ({local / wall:.2f}x)")
-        critical = max(hop + a.task_start + s["voxel"] + hop + a.task_start + max(s["receivers"] or [0.0]) for s in scenes) \
-            + hop + a.task_start + merge
-        print(f"| {hop:g} s | " + " | ".join(cells) + f" | {critical:.1f} s |")
+        print(f"| {tick:g} s | " + " | ".join(cells) + " |")
 
 
 if __name__ == "__main__":

@@ -9,6 +9,7 @@
 #include "cluster/slurm.h"
 #include "core/error.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -59,7 +60,7 @@ void submitToSlurm(const BakeOptions& options) {
         } catch (const std::exception&) {
             // A scene that does not load fails in its voxel unit, which reports why as a local
             // bake does; one camera unit stands for the cameras it never showed.
-            scene.units = cluster::planSceneUnits(job, options.slurmOptions.bands, 1);
+            scene.units = cluster::planSceneUnits(job, std::max(1, options.slurmOptions.bands), 1);
         }
         plan.scenes.push_back(scene);
     }
