@@ -139,6 +139,44 @@ std::string generatedAtlasName(const LightmapSettings& settings) {
 ReceiverScene::ReceiverScene(const Scene& scene)
     : triangles(gatherTriangles(scene)), bvh(Bvh::build(triangles)), traceScene(TraceScene::build(scene, triangles)) {}
 
+GeneratedUvs generateSharedAtlasUvs(Scene& scene, const BakeSettings& settings, Diagnostics& diagnostics) {
+    GeneratedUvs out;
+    LightmapSettings& lightmap = out.lightmap;  // generated UVs may need a larger atlas
+    lightmap = settings.lightmap;
+    // Generated UVs for the meshes of the shared atlas that have none: into the shared atlas
+    // where none of its meshes has TEXCOORD_1, else into an image of their own (their charts
+    // cannot share another layout's). Meshes of atlas groups, or of one image per mesh, keep
+    // what they have.
+    const MeshesWithoutUv1 withoutUv1 = settings.outputs.lightmaps && settings.generateLightmapUvs
+                                            ? sharedAtlasMeshesWithoutUv1(scene, settings.lightmap)
+                                            : MeshesWithoutUv1{};
+    if (withoutUv1.meshes.empty()) return out;
+    out.report = generateLightmapUvs(scene, withoutUv1.meshes, settings.lightmap.width, settings.lightmap.height);
+    const LightmapUvReport& uvs = *out.report;
+    if (!settings.quiet) std::fprintf(stderr, "%s\n", describeLightmapUvs(uvs).c_str());
+    out.layouts.resize(scene.meshes.size());
+    for (size_t m = 0; m < scene.meshes.size(); ++m) out.layouts[m].source = scene.meshes[m].source;
+    for (const uint32_t m : withoutUv1.meshes)
+        out.layouts[m] = {scene.meshes[m].source, scene.meshes[m].uv1, scene.meshes[m].indices};
+    if (withoutUv1.othersHaveUv1) {
+        AtlasGroup generated;
+        generated.name = generatedAtlasName(lightmap);
+        generated.meshIndices = withoutUv1.meshes;
+        generated.width = uvs.width;
+        generated.height = uvs.height;
+        generated.origin = "generated lightmap UVs";
+        lightmap.atlases.push_back(generated);
+    } else if (uvs.width != lightmap.width || uvs.height != lightmap.height) {
+        diagnostics.warn(scene.sourcePath + ": the generated lightmap UVs' " + std::to_string(uvs.charts) +
+                         " charts need a " + std::to_string(uvs.width) + " x " + std::to_string(uvs.height) +
+                         " atlas, not " + std::to_string(lightmap.width) + " x " + std::to_string(lightmap.height) +
+                         ": the lightmap is baked at that size");
+        lightmap.width = uvs.width;
+        lightmap.height = uvs.height;
+    }
+    return out;
+}
+
 VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnostics& diagnostics) {
     validateBakeSettings(settings);
     VoxelStages stages;
@@ -155,45 +193,18 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
     for (const std::string& warning : choice.warnings) diagnostics.warn(warning);
     checkLightAttenuationNames(scene, settings.lighting);
     if (settings.outputs.lightmaps) checkAtlasGroups(scene, settings.lightmap);
-    LightmapSettings& lightmap = stages.lightmap;  // generated UVs may need a larger atlas
-    lightmap = settings.lightmap;
-    // Generated UVs for the meshes of the shared atlas that have none: into the shared atlas
-    // where none of its meshes has TEXCOORD_1, else into an image of their own (their charts
-    // cannot share another layout's). Meshes of atlas groups, or of one image per mesh, keep
-    // what they have.
-    const MeshesWithoutUv1 withoutUv1 = settings.outputs.lightmaps && settings.generateLightmapUvs
-                                            ? sharedAtlasMeshesWithoutUv1(scene, settings.lightmap)
-                                            : MeshesWithoutUv1{};
-    if (!withoutUv1.meshes.empty()) {
-        result.lightmapUvs = timed(result.stages, "lightmap uvs", [&] {
-            return generateLightmapUvs(scene, withoutUv1.meshes, settings.lightmap.width, settings.lightmap.height);
-        });
-        const LightmapUvReport& uvs = *result.lightmapUvs;
-        if (!settings.quiet) std::fprintf(stderr, "%s\n", describeLightmapUvs(uvs).c_str());
-        result.generatedLayouts.resize(scene.meshes.size());
-        for (size_t m = 0; m < scene.meshes.size(); ++m) result.generatedLayouts[m].source = scene.meshes[m].source;
-        for (const uint32_t m : withoutUv1.meshes)
-            result.generatedLayouts[m] = {scene.meshes[m].source, scene.meshes[m].uv1, scene.meshes[m].indices};
-        if (withoutUv1.othersHaveUv1) {
-            AtlasGroup generated;
-            generated.name = generatedAtlasName(lightmap);
-            generated.meshIndices = withoutUv1.meshes;
-            generated.width = uvs.width;
-            generated.height = uvs.height;
-            generated.origin = "generated lightmap UVs";
-            lightmap.atlases.push_back(generated);
-        } else if (uvs.width != lightmap.width || uvs.height != lightmap.height) {
-            diagnostics.warn(scene.sourcePath + ": the generated lightmap UVs' " + std::to_string(uvs.charts) +
-                             " charts need a " + std::to_string(uvs.width) + " x " + std::to_string(uvs.height) +
-                             " atlas, not " + std::to_string(lightmap.width) + " x " + std::to_string(lightmap.height) +
-                             ": the lightmap is baked at that size");
-            lightmap.width = uvs.width;
-            lightmap.height = uvs.height;
-        }
+    const auto uvStart = std::chrono::steady_clock::now();
+    GeneratedUvs generated = generateSharedAtlasUvs(scene, settings, diagnostics);
+    if (generated.report) {
+        result.stages.push_back(
+            {"lightmap uvs", std::chrono::duration<double>(std::chrono::steady_clock::now() - uvStart).count()});
+        result.lightmapUvs = generated.report;
+        result.generatedLayouts = std::move(generated.layouts);
         BakeSettings grown = settings;
-        grown.lightmap = lightmap;
+        grown.lightmap = generated.lightmap;
         checkMemoryBudget(scene, grown, voxelSize);
     }
+    stages.lightmap = std::move(generated.lightmap);
     applySkySettings(settings, scene);
     if (scene.lights.empty() && !scene.hasEmitters() && !scene.sky.present())
         diagnostics.warn(scene.sourcePath + ": the scene has no lights, no emissive materials and no sky: the bake is black");

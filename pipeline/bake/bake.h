@@ -82,6 +82,17 @@ struct ReceiverScene {
     explicit ReceiverScene(const Scene& scene);
 };
 
+// Lightmap UVs for the shared atlas's meshes that have no TEXCOORD_1 (when the settings
+// generate them), written into `scene`, and the lightmap settings they leave: the shared atlas
+// grown to fit their charts (a warning says so), or a group of their own appended where other
+// meshes of the shared atlas have TEXCOORD_1.
+struct GeneratedUvs {
+    LightmapSettings lightmap;
+    std::optional<LightmapUvReport> report;  // none generated: empty
+    std::vector<GeneratedLayout> layouts;    // then per scene mesh: what glTF out writes
+};
+GeneratedUvs generateSharedAtlasUvs(Scene& scene, const BakeSettings& settings, Diagnostics& diagnostics);
+
 struct VoxelStages {
     BakeResult result;          // every field but lightmaps and images
     LightmapSettings lightmap;  // the settings', with the atlas generated lightmap UVs need

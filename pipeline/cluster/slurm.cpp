@@ -87,7 +87,18 @@ std::string listText(const std::vector<int>& values) {
     return out;
 }
 
-json sceneUnitsJson(const SceneUnits& units) { return {{"bands", units.lightmapBands}, {"cameras", units.cameras}}; }
+json sceneUnitsJson(const SceneUnits& units) {
+    json atlases = json::array();
+    for (const SceneUnits::Atlas& atlas : units.atlases) atlases.push_back({{"name", atlas.name}, {"bands", atlas.bands}});
+    return {{"atlases", atlases}, {"cameras", units.cameras}};
+}
+
+bool sameUnits(const SceneUnits& a, const SceneUnits& b) {
+    if (a.cameras != b.cameras || a.atlases.size() != b.atlases.size()) return false;
+    for (size_t k = 0; k < a.atlases.size(); ++k)
+        if (a.atlases[k].name != b.atlases[k].name || a.atlases[k].bands != b.atlases[k].bands) return false;
+    return true;
+}
 
 // The batch script of one kind of unit; `unitArguments` follow `voxlight bake-unit <work>`.
 std::string batchScript(const ClusterPlan& plan, const SlurmOptions& options, const std::string& name,
@@ -229,7 +240,8 @@ ClusterPlan readPlan(const std::string& workDir) {
             scene.scenePath = s.at("scene").get<std::string>();
             scene.outputDir = s.at("output").get<std::string>();
             scene.fingerprint = s.at("fingerprint").get<std::string>();
-            scene.units.lightmapBands = s.at("units").at("bands").get<int>();
+            for (const json& atlas : s.at("units").at("atlases"))
+                scene.units.atlases.push_back({atlas.at("name").get<std::string>(), atlas.at("bands").get<int>()});
             scene.units.cameras = s.at("units").at("cameras").get<int>();
             plan.scenes.push_back(scene);
         }
@@ -286,8 +298,7 @@ std::vector<std::string> submit(ClusterPlan& plan, const SlurmOptions& options) 
             same = old.scenes.size() == plan.scenes.size();
             for (size_t k = 0; same && k < plan.scenes.size(); ++k)
                 same = old.scenes[k].fingerprint == plan.scenes[k].fingerprint &&
-                       old.scenes[k].units.lightmapBands == plan.scenes[k].units.lightmapBands &&
-                       old.scenes[k].units.cameras == plan.scenes[k].units.cameras;
+                       sameUnits(old.scenes[k].units, plan.scenes[k].units);
         } catch (const InputError&) {
             same = false;
         }

@@ -3,6 +3,7 @@
 #include "cluster/unit_file.h"
 #include "cluster/voxel_state.h"
 #include "core/error.h"
+#include "voxel/voxelize.h"
 
 #include <nlohmann/json.hpp>
 
@@ -113,45 +114,69 @@ std::vector<float> rows(const Image& image, int rowBegin, int rowEnd) {
 
 }  // namespace
 
+int SceneUnits::receiverCount() const {
+    int count = cameras;
+    for (const Atlas& atlas : atlases) count += atlas.bands;
+    return count;
+}
+
+ReceiverUnit receiverUnit(const SceneUnits& units, int receiver) {
+    ReceiverUnit unit;
+    int first = 0;
+    for (size_t a = 0; a < units.atlases.size(); ++a) {
+        if (receiver < first + units.atlases[a].bands) {
+            unit.atlas = static_cast<int>(a);
+            unit.band = receiver - first;
+            unit.bands = units.atlases[a].bands;
+            return unit;
+        }
+        first += units.atlases[a].bands;
+    }
+    unit.camera = receiver - first;
+    return unit;
+}
+
 SceneUnits planSceneUnits(const BakeJob& job, int bands, int cameras) {
     SceneUnits units;
     const BakeSettings& s = job.settings;
-    const bool generatesUvs = s.outputs.lightmaps && s.generateLightmapUvs && bands <= 0;
-    std::optional<Scene> scene;
-    if ((s.outputs.images && cameras < 0) || generatesUvs) scene = loadJobScene(job);
-    if (s.outputs.lightmaps) {
-        double largest = double(s.lightmap.width) * s.lightmap.height;
-        for (const AtlasGroup& group : s.lightmap.atlases)
-            largest = std::max(largest, double(group.width) * group.height);
-        // Generated lightmap UVs may need a larger atlas than the settings name (zdm2: 256² asked,
-        // 1024² needed): generating them here (deterministic, a second or two at most) sizes the
-        // bands as the bake will need them.
-        if (generatesUvs && scene) {
-            const MeshesWithoutUv1 without = sharedAtlasMeshesWithoutUv1(*scene, s.lightmap);
-            if (!without.meshes.empty()) {
-                Scene copy = *scene;
-                const LightmapUvReport uvs =
-                    generateLightmapUvs(copy, without.meshes, s.lightmap.width, s.lightmap.height);
-                largest = std::max(largest, double(uvs.width) * uvs.height);
-            }
-        }
-        units.lightmapBands = bands > 0 ? bands : std::max(1, static_cast<int>(std::ceil(largest / kTexelsPerBand)));
+    if (!s.outputs.lightmaps && !(s.outputs.images && cameras < 0)) {
+        units.cameras = s.outputs.images ? cameras : 0;
+        return units;
     }
-    if (s.outputs.images)
-        units.cameras = cameras >= 0 ? cameras : static_cast<int>(bakeCameras(*scene, s).size());
+    Scene scene = loadJobScene(job);
+    if (s.outputs.images) units.cameras = cameras >= 0 ? cameras : static_cast<int>(bakeCameras(scene, s).size());
+    if (!s.outputs.lightmaps) return units;
+    // The atlases as the bake will make them: the scene anchored at its voxel size and given
+    // its generated lightmap UVs (zdm2: 256² asked, 1024² needed), the same floats as the bake's.
+    VoxelSettings voxel = s.voxel;
+    voxel.voxelSize = chooseVoxelSize(scene, s).voxelSize;
+    anchorToVoxelGrid(scene, voxelSizeFor(scene, voxel));
+    Diagnostics quiet(false, false);
+    BakeSettings silent = s;
+    silent.quiet = true;
+    const GeneratedUvs generated = generateSharedAtlasUvs(scene, silent, quiet);
+    for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, generated.lightmap, quiet)) {
+        const double texels = double(atlas.receivers.width) * atlas.receivers.height;
+        units.atlases.push_back(
+            {atlas.name, bands > 0 ? bands : std::max(1, static_cast<int>(std::ceil(texels / kTexelsPerBand)))});
+    }
     return units;
 }
 
 std::string receiverName(const SceneUnits& units, int receiver) {
-    if (receiver < units.lightmapBands)
-        return "lightmap " + std::to_string(receiver) + " of " + std::to_string(units.lightmapBands);
-    return "camera " + std::to_string(receiver - units.lightmapBands);
+    const ReceiverUnit unit = receiverUnit(units, receiver);
+    if (unit.atlas >= 0)
+        return "atlas '" + units.atlases[size_t(unit.atlas)].name + "' rows " + std::to_string(unit.band) + " of " +
+               std::to_string(unit.bands);
+    return "camera " + std::to_string(unit.camera);
 }
 
 std::string receiverFolder(const SceneUnits& units, int receiver) {
-    if (receiver < units.lightmapBands)
-        return "lightmap-" + std::to_string(receiver) + "-of-" + std::to_string(units.lightmapBands);
-    return "camera-" + std::to_string(receiver - units.lightmapBands);
+    const ReceiverUnit unit = receiverUnit(units, receiver);
+    if (unit.atlas >= 0)
+        return "atlas-" + std::to_string(unit.atlas) + "-band-" + std::to_string(unit.band) + "-of-" +
+               std::to_string(unit.bands);
+    return "camera-" + std::to_string(unit.camera);
 }
 
 std::optional<UnitRecord> readUnitRecord(const std::string& unitFolder) {
@@ -206,25 +231,31 @@ UnitRecord runReceiverUnit(const BakeJob& job, const std::string& sceneWork, con
         const ReceiverScene tracing(scene);
         const ReceiverShading shading(tracing, gather.mips, gather.cache, settings, state.onGpu);
         UnitFile file;
-        if (receiver < units.lightmapBands) {
+        const ReceiverUnit unit = receiverUnit(units, receiver);
+        if (unit.atlas >= 0) {
             Diagnostics ignored(false, false);  // the merge reports the atlases' warnings once
-            file.header["atlases"] = json::array();  // a scene may bake no atlas at all
-            for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, state.lightmap, ignored)) {
-                const auto [rowBegin, rowEnd] = bandRows(atlas.receivers.height, receiver, units.lightmapBands);
-                const ReceiverLighting lit = shading.shadeAtlasRows(atlas, rowBegin, rowEnd);
-                file.header["atlases"].push_back({{"name", atlas.name},
-                                                  {"width", atlas.receivers.width},
-                                                  {"height", atlas.receivers.height},
-                                                  {"row_begin", rowBegin},
-                                                  {"row_end", rowEnd}});
-                file.add(rows(lit.direct, rowBegin, rowEnd));
-                file.add(rows(lit.indirect, rowBegin, rowEnd));
-            }
-            file.header["kind"] = "lightmap band";
+            const std::vector<LightmapAtlas> atlases = buildLightmapReceivers(scene, state.lightmap, ignored);
+            const std::string& planned = units.atlases[size_t(unit.atlas)].name;
+            if (atlases.size() != units.atlases.size() || atlases[size_t(unit.atlas)].name != planned)
+                throw InputError(job.scenePath + ": its lightmap atlases are not the " +
+                                 std::to_string(units.atlases.size()) + " planned (atlas " +
+                                 std::to_string(unit.atlas) + " '" + planned +
+                                 "'): the scene or its settings changed since the job was submitted");
+            const LightmapAtlas& atlas = atlases[size_t(unit.atlas)];
+            const auto [rowBegin, rowEnd] = bandRows(atlas.receivers.height, unit.band, unit.bands);
+            const ReceiverLighting lit = shading.shadeAtlasRows(atlas, rowBegin, rowEnd);
+            file.header = {{"kind", "lightmap band"},
+                           {"atlas", atlas.name},
+                           {"width", atlas.receivers.width},
+                           {"height", atlas.receivers.height},
+                           {"row_begin", rowBegin},
+                           {"row_end", rowEnd}};
+            file.add(rows(lit.direct, rowBegin, rowEnd));
+            file.add(rows(lit.indirect, rowBegin, rowEnd));
             writeUnitFile(file, (dir / kBandFile).string());
         } else {
             const std::vector<Camera> cameras = bakeCameras(scene, settings);
-            const size_t c = size_t(receiver - units.lightmapBands);
+            const size_t c = size_t(unit.camera);
             if (c >= cameras.size())
                 throw InputError(job.scenePath + ": has " + std::to_string(cameras.size()) + " cameras, not " +
                                  std::to_string(c + 1) + ": the scene changed since the job was submitted");
@@ -270,41 +301,38 @@ BakeReport mergeScene(const BakeJob& job, const std::string& sceneWork, const Sc
         result.mips = buildRadianceMips(result.voxels);
 
         double lightmapSeconds = 0.0, imageSeconds = 0.0;
-        if (units.lightmapBands > 0) {
+        if (job.settings.outputs.lightmaps) {
             const std::vector<LightmapAtlas> atlases = buildLightmapReceivers(scene, state.lightmap, diagnostics);
-            std::vector<Image> direct, indirect;
-            for (const LightmapAtlas& atlas : atlases) {
-                direct.emplace_back(atlas.receivers.width, atlas.receivers.height, 3);
-                indirect.emplace_back(atlas.receivers.width, atlas.receivers.height, 3);
-            }
-            for (int band = 0; band < units.lightmapBands; ++band) {
-                const std::string path = (fs::path(sceneWork) / receiverFolder(units, band) / kBandFile).string();
-                const UnitFile file = readUnitFile(path);
-                const json& list = file.header.at("atlases");
-                if (list.size() != atlases.size())
-                    throw InputError(path + ": " + std::to_string(list.size()) + " atlases, the scene has " +
-                                     std::to_string(atlases.size()));
-                for (size_t a = 0; a < atlases.size(); ++a) {
-                    const auto [rowBegin, rowEnd] = bandRows(atlases[a].receivers.height, band, units.lightmapBands);
-                    if (list[a].at("name") != atlases[a].name || list[a].at("row_begin") != rowBegin ||
-                        list[a].at("row_end") != rowEnd || list[a].at("width") != atlases[a].receivers.width)
-                        throw InputError(path + ": atlas " + std::to_string(a) + " is not the scene's '" +
-                                         atlases[a].name + "' rows " + std::to_string(rowBegin) + "-" +
-                                         std::to_string(rowEnd));
-                    const size_t offset = size_t(rowBegin) * size_t(atlases[a].receivers.width) * 3;
-                    const size_t floats = size_t(rowEnd - rowBegin) * size_t(atlases[a].receivers.width) * 3;
-                    const std::vector<float> d = file.take<float>(2 * a, path), i = file.take<float>(2 * a + 1, path);
+            if (atlases.size() != units.atlases.size())
+                throw InputError(job.scenePath + ": " + std::to_string(atlases.size()) + " lightmap atlases, " +
+                                 std::to_string(units.atlases.size()) + " when the job was submitted");
+            int receiver = 0;
+            for (size_t a = 0; a < atlases.size(); ++a) {
+                const LightmapAtlas& atlas = atlases[a];
+                Image direct(atlas.receivers.width, atlas.receivers.height, 3);
+                Image indirect = direct;
+                for (int band = 0; band < units.atlases[a].bands; ++band, ++receiver) {
+                    const std::string path = (fs::path(sceneWork) / receiverFolder(units, receiver) / kBandFile).string();
+                    const UnitFile file = readUnitFile(path);
+                    const auto [rowBegin, rowEnd] = bandRows(atlas.receivers.height, band, units.atlases[a].bands);
+                    const json& h = file.header;
+                    if (h.value("atlas", "") != atlas.name || h.value("row_begin", -1) != rowBegin ||
+                        h.value("row_end", -1) != rowEnd || h.value("width", -1) != atlas.receivers.width)
+                        throw InputError(path + ": not rows " + std::to_string(rowBegin) + "-" + std::to_string(rowEnd) +
+                                         " of the scene's atlas '" + atlas.name + "'");
+                    const size_t offset = size_t(rowBegin) * size_t(atlas.receivers.width) * 3;
+                    const size_t floats = size_t(rowEnd - rowBegin) * size_t(atlas.receivers.width) * 3;
+                    const std::vector<float> d = file.take<float>(0, path), i = file.take<float>(1, path);
                     if (d.size() != floats || i.size() != floats) throw InputError(path + ": a band of the wrong size");
-                    std::copy(d.begin(), d.end(), direct[a].pixels.begin() + long(offset));
-                    std::copy(i.begin(), i.end(), indirect[a].pixels.begin() + long(offset));
+                    std::copy(d.begin(), d.end(), direct.pixels.begin() + long(offset));
+                    std::copy(i.begin(), i.end(), indirect.pixels.begin() + long(offset));
+                    lightmapSeconds += records[size_t(receiver) + 1].seconds;
                 }
-                lightmapSeconds += records[size_t(band) + 1].seconds;
+                result.lightmaps.push_back(finishLightmap(atlas, direct, indirect));
             }
-            for (size_t a = 0; a < atlases.size(); ++a)
-                result.lightmaps.push_back(finishLightmap(atlases[a], direct[a], indirect[a]));
         }
         for (int c = 0; c < units.cameras; ++c) {
-            const int r = units.lightmapBands + c;
+            const int r = units.receiverCount() - units.cameras + c;
             const std::string path = (fs::path(sceneWork) / receiverFolder(units, r) / kImageFile).string();
             const UnitFile file = readUnitFile(path);
             const int width = file.header.at("width").get<int>(), height = file.header.at("height").get<int>();
@@ -320,7 +348,7 @@ BakeReport mergeScene(const BakeJob& job, const std::string& sceneWork, const Sc
             result.images.push_back(std::move(image));
             imageSeconds += records[size_t(r) + 1].seconds;
         }
-        if (units.lightmapBands > 0) report.stages.push_back({"lightmaps", lightmapSeconds});
+        if (job.settings.outputs.lightmaps) report.stages.push_back({"lightmaps", lightmapSeconds});
         if (units.cameras > 0) report.stages.push_back({"images", imageSeconds});
         for (const UnitRecord& record : records)
             report.peakMemoryBytes = std::max(report.peakMemoryBytes, record.peakMemoryBytes);

@@ -1,8 +1,8 @@
 // A bake split into units that run as separate processes, on one machine or on many that
 // share a folder (cluster/slurm.h submits them to Slurm). Per scene:
 //   voxel           the voxel stages (bake.h bakeVoxelStages) → voxel-state.vxu (voxel_state.h)
-//   lightmap t of T rows [t·H/T, (t+1)·H/T) of every atlas of the scene, whatever size the
-//                   atlas turns out to have → band.vxu
+//   atlas a, band t rows [t·H/T, (t+1)·H/T) of the scene's atlas a (a large atlas is split
+//                   into T bands) → band.vxu
 //   camera c        one camera image → image.vxu
 //   merge           every unit's result → the scene's output folder, written by the function a
 //                   local bake writes with (bake_job.h writeBakeFiles), under its lock
@@ -27,17 +27,30 @@ namespace vl::cluster {
 constexpr double kTexelsPerBand = 512.0 * 512.0;
 
 struct SceneUnits {
-    int lightmapBands = 0;  // 0 when the job writes no lightmaps
-    int cameras = 0;        // 0 when it writes no images
-    int receiverCount() const { return lightmapBands + cameras; }
+    struct Atlas {
+        std::string name;  // as buildLightmapReceivers names it ("lightmap", a group's name)
+        int bands = 1;     // units its rows are split into
+    };
+    std::vector<Atlas> atlases;  // in the order the bake makes them; none without lightmaps
+    int cameras = 0;             // 0 when the job writes no images
+    int receiverCount() const;
 };
 
-// The units of a job's scene: the bands (`bands` > 0, else one per kTexelsPerBand texels of its
-// largest atlas, generated lightmap UVs' included) and the cameras (`cameras` >= 0, else
-// counted). Loads the scene where it needs to: throws what loading throws.
+// What receiver unit r of a scene shades: band `band` of `bands` of atlas `atlas`, or camera
+// `camera` (the atlases' bands come first, atlas by atlas).
+struct ReceiverUnit {
+    int atlas = -1, band = 0, bands = 1;
+    int camera = -1;
+};
+ReceiverUnit receiverUnit(const SceneUnits& units, int receiver);
+
+// The units of a job's scene. Loads it and prepares it as a bake does (voxel size, anchoring,
+// generated lightmap UVs) to list its atlases; each gets `bands` bands (> 0), else one per
+// kTexelsPerBand of its texels. The cameras are counted unless `cameras` >= 0. Throws what
+// loading throws.
 SceneUnits planSceneUnits(const BakeJob& job, int bands, int cameras = -1);
 
-// "voxel", "lightmap 2 of 4", "camera 0": receiver index i counts the bands first.
+// "atlas 'lightmap' rows 2 of 4", "camera 0".
 std::string receiverName(const SceneUnits& units, int receiver);
 // The unit's folder name inside the scene's work folder.
 std::string receiverFolder(const SceneUnits& units, int receiver);

@@ -85,7 +85,7 @@ TEST_CASE("A three-scene job baked on a one-node Slurm cluster is the local bake
     const Run first = run(submit);
     INFO(first.output);
     REQUIRE(first.status == 0);
-    CHECK_THAT(first.output, Catch::Contains("submitted 3 voxel unit(s), 10 receiver unit(s)"));
+    CHECK_THAT(first.output, Catch::Contains("submitted 3 voxel unit(s), 12 receiver unit(s)"));
     CHECK_THAT(first.output, Catch::Contains("merge: done: 3 scene(s) published, 0 failed"));
     const Run local = run(kVoxlight + " bake " + job.string() + " -o " + (root / "local").string() + " -q");
     INFO(local.output);
@@ -108,7 +108,7 @@ TEST_CASE("A three-scene job baked on a one-node Slurm cluster is the local bake
     CHECK(status.status == 0);
     size_t done = 0;
     for (size_t at = 0; (at = status.output.find(": done on ", at)) != std::string::npos; ++at) ++done;
-    CHECK(done == 13);  // 3 voxel units, 2 bands and the cameras (1 + 1 + 2) per scene
+    CHECK(done == 15);  // 3 voxel units; 2 bands per atlas (2 + 1 + 1 atlases); cameras 1 + 1 + 2
 
     // Scenes that fail in their voxel units under --strict (a black scene; the classroom's
     // generated charts outgrowing the 64² atlas): their receivers never run, the merge

@@ -16,7 +16,7 @@
 
 namespace vl::test {
 
-// A job of three scenes: the point-lit box; the window room under an image sky, turned; the
+// A job of three scenes: the point-lit box, its blocks in an atlas group of their own; the window room under an image sky, turned; the
 // classroom (generated lightmap UVs, a sun and a uniform sky, two cameras), as their job files
 // and the README light them.
 inline std::filesystem::path writeThreeSceneJob(const std::filesystem::path& root) {
@@ -25,7 +25,8 @@ inline std::filesystem::path writeThreeSceneJob(const std::filesystem::path& roo
     nlohmann::json j;
     j["settings"] = {{"resolution", 32}, {"lightmap-res", 64}, {"width", 48}, {"height", 32},
                      {"images", true},   {"grids", true}};
-    j["scenes"] = {{{"path", sourceDir() + "/scenes/cornell_box_point.gltf"}},
+    j["scenes"] = {{{"path", sourceDir() + "/scenes/cornell_box_point.gltf"},
+                    {"atlases", {{{"name", "blocks"}, {"meshes", {"ShortBlock", "TallBlock"}}, {"resolution", 96}}}}},
                    {{"path", sourceDir() + "/scenes/window_room.gltf"},
                     {"sky", {{"image", sourceDir() + "/scenes/skies/afternoon.exr"}, {"rotation", 30}}}},
                    {{"path", sourceDir() + "/scenes/classroom.gltf"},

@@ -37,9 +37,12 @@ TEST_CASE("A bake run unit by unit writes the same bytes as the local bake", "[c
         BakeJob split = jobs[k];
         split.outputDir = (root / "split" / std::to_string(k)).string();
         const std::string work = (root / "work" / std::to_string(k)).string();
-        // Three bands: more than one per atlas, and rows that do not divide evenly.
+        // Three bands an atlas: rows that do not divide evenly.
         const SceneUnits units = planSceneUnits(split, 3);
-        CHECK(units.lightmapBands == 3);
+        REQUIRE(units.atlases.size() == (k == 0 ? 2 : 1));
+        CHECK(units.atlases[0].name == "lightmap");
+        if (k == 0) CHECK(units.atlases[1].name == "blocks");
+        for (const SceneUnits::Atlas& atlas : units.atlases) CHECK(atlas.bands == 3);
         CHECK(units.cameras == (k == 2 ? 2 : 1));
         REQUIRE(runVoxelUnit(split, work).ok);
         for (int r = units.receiverCount() - 1; r >= 0; --r) {
@@ -99,7 +102,7 @@ TEST_CASE("A failed unit fails its scene's merge with its error, and the output 
     // Receiver 1 never ran: the merge names it and publishes nothing.
     BakeReport report = mergeScene(job, work, units);
     CHECK_FALSE(report.ok);
-    CHECK_THAT(report.error, Catch::Contains("lightmap 1 of 2") && Catch::Contains("left no result"));
+    CHECK_THAT(report.error, Catch::Contains("atlas 'lightmap' rows 1 of 2") && Catch::Contains("left no result"));
     CHECK_FALSE(fs::exists(job.outputDir + "/bake.json"));
 
     // A voxel unit whose scene is missing: its own error, as a local bake gives it.
@@ -116,7 +119,7 @@ TEST_CASE("A failed unit fails its scene's merge with its error, and the output 
     const UnitRecord receiver = runReceiverUnit(missing, (root / "work-missing").string(), units, 0);
     CHECK_FALSE(receiver.ok);
     CHECK(receiver.error == local.error);
-    REQUIRE(readUnitRecord((root / "work-missing" / "lightmap-0-of-2").string()));
+    REQUIRE(readUnitRecord((root / "work-missing" / "atlas-0-band-0-of-2").string()));
 }
 
 TEST_CASE("A damaged voxel state is refused, naming the file", "[cluster]") {

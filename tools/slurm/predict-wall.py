@@ -30,7 +30,8 @@ def load(work):
     for k, scene in enumerate(plan["scenes"]):
         folder = os.path.join(work, f"scene-{k}")
         units = scene["units"]
-        names = ["voxel"] + [f"lightmap-{b}-of-{units['bands']}" for b in range(units["bands"])] + \
+        names = ["voxel"] + [f"atlas-{a}-band-{b}-of-{atlas['bands']}"
+                             for a, atlas in enumerate(units["atlases"]) for b in range(atlas["bands"])] + \
                 [f"camera-{c}" for c in range(units["cameras"])]
         times = []
         for name in names:

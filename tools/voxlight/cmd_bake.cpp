@@ -58,9 +58,9 @@ void submitToSlurm(const BakeOptions& options) {
         try {
             scene.units = cluster::planSceneUnits(job, options.slurmOptions.bands);
         } catch (const std::exception&) {
-            // A scene that does not load fails in its voxel unit, which reports why as a local
-            // bake does; one camera unit stands for the cameras it never showed.
-            scene.units = cluster::planSceneUnits(job, std::max(1, options.slurmOptions.bands), 1);
+            // A scene that does not load gets no receiver units: its voxel unit fails, saying
+            // why as a local bake does, and the merge reports it.
+            scene.units = cluster::SceneUnits{};
         }
         plan.scenes.push_back(scene);
     }
