@@ -194,18 +194,11 @@ Scene receiverScene(Scene loaded, const VoxelState& state) {
         if (layout.uv1.empty()) continue;
         // The generated UVs split vertices: vertex k is the loaded mesh's vertex vertices[k].
         const Mesh& original = scene.meshes[m];
-        Mesh mesh = original;
-        mesh.positions.clear();
-        mesh.normals.clear();
-        mesh.uv0.clear();
-        mesh.colors.clear();
+        Mesh mesh = original.withoutVertices();
         for (uint32_t old : layout.source.vertices) {
             if (old >= original.positions.size())
                 throw InputError(scene.sourcePath + ": mesh '" + original.name + "' changed since its voxel unit ran");
-            mesh.positions.push_back(original.positions[old]);
-            if (!original.normals.empty()) mesh.normals.push_back(original.normals[old]);
-            if (!original.uv0.empty()) mesh.uv0.push_back(original.uv0[old]);
-            if (!original.colors.empty()) mesh.colors.push_back(original.colors[old]);
+            mesh.appendVertexOf(original, old);
         }
         mesh.source.vertices = layout.source.vertices;
         mesh.uv1 = layout.uv1;

@@ -85,6 +85,25 @@ struct Mesh {
     std::vector<uint32_t> indices;  // 3 per triangle
 
     size_t triangleCount() const { return indices.size() / 3; }
+    // The mesh's name, node, source (but its vertex map) and material, without vertices or
+    // triangles: what splitting its vertices starts from.
+    Mesh withoutVertices() const {
+        Mesh out;
+        out.name = name;
+        out.node = node;
+        out.source = source;
+        out.source.vertices.clear();
+        out.material = material;
+        return out;
+    }
+    // Appends a copy of vertex v of `from` (position and every attribute `from` has but uv1,
+    // which a new vertex is given by who splits it).
+    void appendVertexOf(const Mesh& from, uint32_t v) {
+        positions.push_back(from.positions[v]);
+        if (!from.normals.empty()) normals.push_back(from.normals[v]);
+        if (!from.uv0.empty()) uv0.push_back(from.uv0[v]);
+        if (!from.colors.empty()) colors.push_back(from.colors[v]);
+    }
 };
 
 enum class LightType { Point, Spot, Directional };

@@ -609,13 +609,7 @@ LightmapUvReport generateLightmapUvs(Scene& scene, const std::vector<uint32_t>& 
     tbb::parallel_for(size_t(0), scene.meshes.size(), [&](size_t m) {
         if (chartsOf[m].empty()) return;
         const Mesh& mesh = scene.meshes[m];
-        Mesh out = mesh;
-        out.positions.clear();
-        out.normals.clear();
-        out.uv0.clear();
-        out.colors.clear();
-        out.uv1.clear();
-        out.source.vertices.clear();
+        Mesh out = mesh.withoutVertices();
         out.indices.assign(mesh.indices.size(), 0);
         std::unordered_map<uint64_t, uint32_t> vertexOf;  // (old vertex, chart) → new vertex
         for (uint32_t c : chartsOf[m]) {
@@ -626,11 +620,8 @@ LightmapUvReport generateLightmapUvs(Scene& scene, const std::vector<uint32_t>& 
                     const auto [it, added] = vertexOf.emplace((uint64_t(old) << 32) | c, uint32_t(out.positions.size()));
                     if (added) {
                         const vec3& p = mesh.positions[old];
-                        out.positions.push_back(p);
+                        out.appendVertexOf(mesh, old);
                         out.source.vertices.push_back(mesh.source.vertices.empty() ? old : mesh.source.vertices[old]);
-                        if (!mesh.normals.empty()) out.normals.push_back(mesh.normals[old]);
-                        if (!mesh.uv0.empty()) out.uv0.push_back(mesh.uv0[old]);
-                        if (!mesh.colors.empty()) out.colors.push_back(mesh.colors[old]);
                         vec2 local(float((glm::dot(p, chart.axisU) - chart.lower.x) / s + kChartInset),
                                    float((glm::dot(p, chart.axisV) - chart.lower.y) / s + kChartInset));
                         vec2 texel;

@@ -14,6 +14,20 @@
 using namespace vl;
 using namespace vl::test;
 
+namespace {
+
+// A floor at z = 0 and a ledge at z = 0.5 over x < 0 (albedo 0.5); returns the material of
+// radiance Le for the light the test adds above them.
+int addFloorAndLedge(Scene& scene, float Le) {
+    const int floor = addLambert(scene, vec3(0.5f));
+    const int light = addLambert(scene, vec3(0.0f), vec3(Le));
+    addQuad(scene, "floor", floor, vec3(-2, -2, 0), vec3(2, -2, 0), vec3(2, 2, 0), vec3(-2, 2, 0));
+    addQuad(scene, "ledge", floor, vec3(-2, -2, 0.5f), vec3(0, -2, 0.5f), vec3(0, 2, 0.5f), vec3(-2, 2, 0.5f));
+    return light;
+}
+
+}  // namespace
+
 TEST_CASE("A quad light's penumbra at the receivers: one square grid over the quad errs less than its two triangles",
           "[bake]") {
     // Light: the square [−0.3, 0.3]² at z = 1 facing down, radiance 2. Ledge: z = 0.5 over
@@ -21,10 +35,7 @@ TEST_CASE("A quad light's penumbra at the receivers: one square grid over the qu
     // crosses z = 0.5 at (p.x + x) / 2), so its irradiance is Le·π·F of that rectangle.
     const float Le = 2.0f, half = 0.3f;
     Scene scene;
-    const int floor = addLambert(scene, vec3(0.5f));
-    const int light = addLambert(scene, vec3(0.0f), vec3(Le));
-    addQuad(scene, "floor", floor, vec3(-2, -2, 0), vec3(2, -2, 0), vec3(2, 2, 0), vec3(-2, 2, 0));
-    addQuad(scene, "ledge", floor, vec3(-2, -2, 0.5f), vec3(0, -2, 0.5f), vec3(0, 2, 0.5f), vec3(-2, 2, 0.5f));
+    const int light = addFloorAndLedge(scene, Le);
     addQuad(scene, "light", light, vec3(-half, -half, 1), vec3(-half, half, 1), vec3(half, half, 1),
             vec3(half, -half, 1));
     const SceneTriangles triangles = gatherTriangles(scene);
@@ -75,10 +86,7 @@ TEST_CASE("Many emissive triangles are sampled by power at the receivers, and ag
     // within a few percent of the exact form factor.
     const float Le = 2.0f, half = 0.3f;
     Scene scene;
-    const int floor = addLambert(scene, vec3(0.5f));
-    const int light = addLambert(scene, vec3(0.0f), vec3(Le));
-    addQuad(scene, "floor", floor, vec3(-2, -2, 0), vec3(2, -2, 0), vec3(2, 2, 0), vec3(-2, 2, 0));
-    addQuad(scene, "ledge", floor, vec3(-2, -2, 0.5f), vec3(0, -2, 0.5f), vec3(0, 2, 0.5f), vec3(-2, 2, 0.5f));
+    const int light = addFloorAndLedge(scene, Le);
     constexpr int kTiles = 10;
     const float step = 2.0f * half / kTiles;
     for (int a = 0; a < kTiles; ++a)

@@ -18,6 +18,21 @@ using namespace vl;
 using namespace vl::cluster;
 namespace fs = std::filesystem;
 
+namespace {
+
+// The default Cornell box at 16 voxels and a 16² lightmap, into root/out.
+BakeJob tinyBoxJob(const fs::path& root) {
+    BakeJob job;
+    job.scenePath = test::sourceDir() + "/scenes/cornell_box.gltf";
+    job.outputDir = (root / "out").string();
+    job.settings.quiet = true;
+    job.settings.voxel.resolution = 16;
+    job.settings.lightmap.width = job.settings.lightmap.height = 16;
+    return job;
+}
+
+}  // namespace
+
 
 TEST_CASE("A bake run unit by unit writes the same bytes as the local bake", "[cluster]") {
     const fs::path root = test::tempDir("cluster-units");
@@ -88,12 +103,7 @@ TEST_CASE("A scene whose lightmaps have no mesh to bake merges as its local bake
 TEST_CASE("A failed unit fails its scene's merge with its error, and the output folder is left alone", "[cluster]") {
     const fs::path root = test::tempDir("cluster-failed-unit");
     fs::remove_all(root);
-    BakeJob job;
-    job.scenePath = test::sourceDir() + "/scenes/cornell_box.gltf";
-    job.outputDir = (root / "out").string();
-    job.settings.quiet = true;
-    job.settings.voxel.resolution = 16;
-    job.settings.lightmap.width = job.settings.lightmap.height = 16;
+    const BakeJob job = tinyBoxJob(root);
     const std::string work = (root / "work").string();
     const SceneUnits units = planSceneUnits(job, 2);
     REQUIRE(runVoxelUnit(job, work).ok);
@@ -125,12 +135,7 @@ TEST_CASE("A failed unit fails its scene's merge with its error, and the output 
 TEST_CASE("A damaged voxel state is refused, naming the file", "[cluster]") {
     const fs::path root = test::tempDir("cluster-damaged");
     fs::remove_all(root);
-    BakeJob job;
-    job.scenePath = test::sourceDir() + "/scenes/cornell_box.gltf";
-    job.outputDir = (root / "out").string();
-    job.settings.quiet = true;
-    job.settings.voxel.resolution = 16;
-    job.settings.lightmap.width = job.settings.lightmap.height = 16;
+    const BakeJob job = tinyBoxJob(root);
     const std::string work = (root / "work").string();
     REQUIRE(runVoxelUnit(job, work).ok);
     const fs::path state = fs::path(work) / "voxel" / "voxel-state.vxu";
