@@ -7,8 +7,15 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <cstring>
+#include <iterator>
 #include <map>
+#include <optional>
 #include <sstream>
+#include <cerrno>
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <thread>
@@ -28,11 +35,12 @@ struct ProgramResult {
     std::string out, err;
 };
 
-// Runs a program with arguments (no shell), collecting its standard output and error.
+// Runs a program with arguments (no shell), collecting its standard output and error (both
+// drained together, so neither pipe fills while the other is read).
 ProgramResult runProgram(const std::vector<std::string>& arguments) {
     int outPipe[2], errPipe[2];
-    if (::pipe(outPipe) != 0) return {};
-    if (::pipe(errPipe) != 0) {
+    if (::pipe2(outPipe, O_CLOEXEC) != 0) return {};
+    if (::pipe2(errPipe, O_CLOEXEC) != 0) {
         ::close(outPipe[0]);
         ::close(outPipe[1]);
         return {};
@@ -44,7 +52,6 @@ ProgramResult runProgram(const std::vector<std::string>& arguments) {
     if (pid == 0) {
         ::dup2(outPipe[1], STDOUT_FILENO);
         ::dup2(errPipe[1], STDERR_FILENO);
-        for (int fd : {outPipe[0], outPipe[1], errPipe[0], errPipe[1]}) ::close(fd);
         ::execvp(argv[0], argv.data());
         ::_exit(127);
     }
@@ -56,14 +63,31 @@ ProgramResult runProgram(const std::vector<std::string>& arguments) {
         ::close(errPipe[0]);
         return result;
     }
-    // Both pipes drained in turn by poll-free reads: sbatch and squeue write little to stderr.
-    char buffer[4096];
-    for (ssize_t n; (n = ::read(outPipe[0], buffer, sizeof buffer)) > 0;) result.out.append(buffer, size_t(n));
-    for (ssize_t n; (n = ::read(errPipe[0], buffer, sizeof buffer)) > 0;) result.err.append(buffer, size_t(n));
-    ::close(outPipe[0]);
-    ::close(errPipe[0]);
+    pollfd fds[2] = {{outPipe[0], POLLIN, 0}, {errPipe[0], POLLIN, 0}};
+    std::string* sinks[2] = {&result.out, &result.err};
+    for (int open = 2; open > 0;) {
+        if (::poll(fds, 2, -1) < 0) {
+            if (errno == EINTR) continue;
+            break;
+        }
+        for (int k = 0; k < 2; ++k) {
+            if (fds[k].fd < 0 || !(fds[k].revents & (POLLIN | POLLHUP | POLLERR))) continue;
+            char buffer[4096];
+            const ssize_t n = ::read(fds[k].fd, buffer, sizeof buffer);
+            if (n > 0) {
+                sinks[k]->append(buffer, size_t(n));
+            } else if (n == 0 || errno != EINTR) {
+                ::close(fds[k].fd);
+                fds[k].fd = -1;
+                --open;
+            }
+        }
+    }
+    for (const pollfd& f : fds)
+        if (f.fd >= 0) ::close(f.fd);
     int status = 0;
-    ::waitpid(pid, &status, 0);
+    while (::waitpid(pid, &status, 0) < 0)
+        if (errno != EINTR) return result;
     result.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     return result;
 }
@@ -81,9 +105,16 @@ std::string shellQuoted(const std::string& text) {
     return out + "'";
 }
 
+// "0-3,7,9-10": sbatch's array list, runs of consecutive indices as ranges.
 std::string listText(const std::vector<int>& values) {
     std::string out;
-    for (int v : values) out += (out.empty() ? "" : ",") + std::to_string(v);
+    for (size_t k = 0; k < values.size();) {
+        size_t end = k;
+        while (end + 1 < values.size() && values[end + 1] == values[end] + 1) ++end;
+        out += (out.empty() ? "" : ",") + std::to_string(values[k]);
+        if (end > k) out += "-" + std::to_string(values[end]);
+        k = end + 1;
+    }
     return out;
 }
 
@@ -130,11 +161,17 @@ std::string submitScript(const std::string& scriptPath, const std::vector<std::s
     return id;
 }
 
-// Every job of the queue, by id ("123", "123_4"): "STATE|REASON|NODES".
-std::map<std::string, std::string> queue() {
+// This user's jobs in the queue, by id ("123", "123_4"): "STATE|REASON|NODES". Nothing when
+// squeue fails (`error` then says why).
+std::optional<std::map<std::string, std::string>> queue(std::string* error = nullptr) {
+    const ProgramResult r = runProgram({"squeue", "--me", "-h", "-r", "-o", "%i|%T|%r|%N"});
+    if (r.status != 0) {
+        if (error)
+            *error = r.status == 127 || r.status == -1 ? "squeue cannot run (is Slurm's client installed?)"
+                                                       : "squeue failed: " + trimmed(r.err.empty() ? r.out : r.err);
+        return std::nullopt;
+    }
     std::map<std::string, std::string> jobs;
-    const ProgramResult r = runProgram({"squeue", "-h", "-r", "-o", "%i|%T|%r|%N"});
-    if (r.status != 0) return jobs;
     std::istringstream lines(r.out);
     for (std::string line; std::getline(lines, line);) {
         const size_t bar = line.find('|');
@@ -146,7 +183,14 @@ std::map<std::string, std::string> queue() {
 // scontrol's "JobState=… Reason=…" of a job that left the queue, while Slurm still keeps it.
 std::string finishedJobState(const std::string& id) {
     const ProgramResult r = runProgram({"scontrol", "-o", "show", "job", id});
-    if (r.status != 0) return "";
+    if (r.status != 0) {
+        // Slurm forgets a finished job after MinJobAge; accounting (where a site keeps it) does not.
+        const ProgramResult a = runProgram({"sacct", "-n", "-P", "-X", "-j", id, "-o", "State,ExitCode"});
+        const std::string line = trimmed(a.out.substr(0, a.out.find('\n')));
+        if (a.status != 0 || line.empty()) return "";
+        const size_t bar = line.find('|');
+        return line.substr(0, bar) + (bar == std::string::npos ? "" : ", exit code " + line.substr(bar + 1));
+    }
     const auto field = [&](const std::string& key) {
         const size_t at = r.out.find(" " + key + "=");
         if (at == std::string::npos) return std::string();
@@ -169,8 +213,47 @@ std::string queuedText(const std::string& entry) {
     return text;
 }
 
+// The files a glTF or GLB points at through its buffers' and images' uris (data: uris aside),
+// resolved against its folder; nothing for a file that does not parse (its bake says why).
+std::vector<fs::path> referencedFiles(const std::string& scenePath) {
+    std::vector<fs::path> files;
+    std::ifstream in(scenePath, std::ios::binary);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (text.size() >= 20 && text.compare(0, 4, "glTF") == 0) {  // GLB: the JSON chunk first
+        uint32_t length = 0;
+        std::memcpy(&length, text.data() + 12, 4);
+        text = text.substr(20, std::min<size_t>(length, text.size() - 20));
+    }
+    const json gltf = json::parse(text, nullptr, false);
+    if (gltf.is_discarded() || !gltf.is_object()) return files;
+    const auto decoded = [](const std::string& uri) {
+        std::string out;
+        for (size_t i = 0; i < uri.size(); ++i) {
+            if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
+                std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
+                out += static_cast<char>(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
+                i += 2;
+            } else {
+                out += uri[i];
+            }
+        }
+        return out;
+    };
+    for (const char* key : {"buffers", "images"})
+        if (gltf.contains(key) && gltf[key].is_array())
+            for (const json& item : gltf[key])
+                if (item.is_object() && item.contains("uri") && item["uri"].is_string()) {
+                    const std::string uri = item["uri"].get<std::string>();
+                    if (uri.rfind("data:", 0) != 0) files.push_back(fs::absolute(scenePath).parent_path() / decoded(uri));
+                }
+    return files;
+}
+
 bool anyQueued(const ClusterPlan& plan) {
-    const std::map<std::string, std::string> jobs = queue();
+    std::string error;
+    const std::optional<std::map<std::string, std::string>> queued = queue(&error);
+    if (!queued) throw Error("cannot tell whether the bake submitted into " + plan.workDir + " still runs: " + error);
+    const std::map<std::string, std::string>& jobs = *queued;
     std::vector<std::string> ids{plan.voxelJob, plan.mergeJob};
     ids.insert(ids.end(), plan.receiverJobs.begin(), plan.receiverJobs.end());
     for (const auto& [id, entry] : jobs)
@@ -203,7 +286,7 @@ void writePlan(const ClusterPlan& plan) {
     j["scenes"] = json::array();
     for (const ClusterPlan::Scene& s : plan.scenes)
         j["scenes"].push_back({{"scene", s.scenePath}, {"output", s.outputDir}, {"fingerprint", s.fingerprint},
-                               {"units", sceneUnitsJson(s.units)}});
+                               {"units", sceneUnitsJson(s.units)}, {"plan_error", s.planError}});
     j["slurm"] = {{"voxel_job", plan.voxelJob},       {"voxel_tasks", plan.voxelTasks},
                   {"receiver_jobs", plan.receiverJobs}, {"receiver_tasks", plan.receiverTasks},
                   {"merge_job", plan.mergeJob}};
@@ -240,6 +323,7 @@ ClusterPlan readPlan(const std::string& workDir) {
             scene.scenePath = s.at("scene").get<std::string>();
             scene.outputDir = s.at("output").get<std::string>();
             scene.fingerprint = s.at("fingerprint").get<std::string>();
+            scene.planError = s.at("plan_error").get<std::string>();
             for (const json& atlas : s.at("units").at("atlases"))
                 scene.units.atlases.push_back({atlas.at("name").get<std::string>(), atlas.at("bands").get<int>()});
             scene.units.cameras = s.at("units").at("cameras").get<int>();
@@ -268,13 +352,10 @@ std::string fingerprint(const BakeJob& job, const std::vector<std::string>& jobF
         if (::stat(file.c_str(), &st) == 0)
             text << file.string() << ' ' << st.st_size << ' ' << st.st_mtim.tv_sec << '.' << st.st_mtim.tv_nsec << '\n';
     };
-    std::vector<fs::path> files;
-    std::error_code ec;
-    const fs::path sceneFolder = fs::absolute(job.scenePath).parent_path();
-    for (const auto& entry : fs::directory_iterator(sceneFolder, ec))
-        if (entry.is_regular_file(ec)) files.push_back(entry.path());
-    std::sort(files.begin(), files.end());
-    for (const fs::path& f : files) stamp(f);
+    // The scene file, the files it points at (buffers, textures), the sky image, the job files.
+    stamp(fs::absolute(job.scenePath));
+    for (const fs::path& f : referencedFiles(job.scenePath)) stamp(f);
+    if (!job.settings.skyImage.empty()) stamp(fs::absolute(job.settings.skyImage));
     for (const std::string& f : jobFiles) stamp(fs::absolute(f));
     uint64_t hash = 0xcbf29ce484222325ull;
     for (char c : text.str()) hash = (hash ^ static_cast<unsigned char>(c)) * 0x100000001b3ull;
@@ -283,12 +364,50 @@ std::string fingerprint(const BakeJob& job, const std::vector<std::string>& jobF
     return hex;
 }
 
+namespace {
+
+// One submission at a time per work folder: an exclusive lock on <work>/submit.lock, held
+// while it plans, submits and releases, and dropped by the system however the command ends.
+class SubmitLock {
+public:
+    explicit SubmitLock(const std::string& workDir) {
+        fs::create_directories(workDir);
+        const std::string path = (fs::path(workDir) / "submit.lock").string();
+        fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+        if (fd_ < 0 || ::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+            if (fd_ >= 0) ::close(fd_);
+            throw Error("another voxlight bake --slurm is submitting into " + workDir + ": wait for it");
+        }
+    }
+    ~SubmitLock() { ::close(fd_); }
+    SubmitLock(const SubmitLock&) = delete;
+    SubmitLock& operator=(const SubmitLock&) = delete;
+
+private:
+    int fd_ = -1;
+};
+
+// Slurm's MaxArraySize: array indices must stay below it (1001 unless the site set it).
+int maxArraySize() {
+    const ProgramResult r = runProgram({"scontrol", "show", "config"});
+    std::istringstream lines(r.out);
+    for (std::string line; std::getline(lines, line);)
+        if (line.rfind("MaxArraySize", 0) == 0) {
+            const size_t eq = line.find('=');
+            if (eq != std::string::npos) return std::atoi(trimmed(line.substr(eq + 1)).c_str());
+        }
+    return 1001;
+}
+
+}  // namespace
+
 std::vector<std::string> submit(ClusterPlan& plan, const SlurmOptions& options) {
     std::vector<std::string> lines;
+    std::optional<SubmitLock> lock;
+    if (!options.dryRun) lock.emplace(plan.workDir);
     // A job submitted here before: keep its units' results when nothing changed.
-    const fs::path planPath = fs::path(plan.workDir) / kPlanFile;
-    if (fs::exists(planPath)) {
-        bool same = false;
+    bool same = false;
+    if (fs::exists(fs::path(plan.workDir) / kPlanFile)) {
         try {
             const ClusterPlan old = readPlan(plan.workDir);
             if (!options.dryRun && anyQueued(old))
@@ -298,24 +417,62 @@ std::vector<std::string> submit(ClusterPlan& plan, const SlurmOptions& options) 
             same = old.scenes.size() == plan.scenes.size();
             for (size_t k = 0; same && k < plan.scenes.size(); ++k)
                 same = old.scenes[k].fingerprint == plan.scenes[k].fingerprint &&
+                       old.scenes[k].planError == plan.scenes[k].planError &&
                        sameUnits(old.scenes[k].units, plan.scenes[k].units);
         } catch (const InputError&) {
             same = false;
         }
-        if (!same && !options.dryRun) {
-            for (size_t k = 0;; ++k) {
-                const fs::path scene = sceneWorkFolder(plan.workDir, k);
-                if (!fs::exists(scene)) break;
-                fs::remove_all(scene);
-            }
-            lines.push_back("the job changed since its last submission: every unit runs again");
+        if (!same) lines.push_back("the job changed since its last submission: every unit runs again");
+    }
+    // What is done; the rest runs, its old results and staging folders removed first so that
+    // neither --slurm-status nor the merge reads a result of the last run as this one's.
+    plan.voxelTasks.clear();
+    plan.receiverTasks.assign(plan.scenes.size(), {});
+    const auto done = [&](const fs::path& folder) {
+        const std::optional<UnitRecord> record = same ? readUnitRecord(folder.string()) : std::nullopt;
+        return record && record->ok;
+    };
+    for (size_t k = 0; k < plan.scenes.size(); ++k) {
+        const fs::path work = sceneWorkFolder(plan.workDir, k);
+        if (!options.dryRun) {
+            std::error_code ec;
+            if (!same) fs::remove_all(work, ec);
+            for (const auto& entry : fs::directory_iterator(work, ec))
+                if (entry.path().filename().string().find(".partial-") != std::string::npos)
+                    fs::remove_all(entry.path(), ec);
+        }
+        if (!plan.scenes[k].planError.empty()) continue;  // the merge reports it
+        if (!done(work / kVoxelFolder)) plan.voxelTasks.push_back(int(k));
+        const SceneUnits& units = plan.scenes[k].units;
+        for (int r = 0; r < units.receiverCount(); ++r)
+            if (!done(work / receiverFolder(units, r))) plan.receiverTasks[k].push_back(r);
+        if (!options.dryRun) {
+            std::error_code ec;
+            if (!done(work / kVoxelFolder)) fs::remove_all(work / kVoxelFolder, ec);
+            for (int r : plan.receiverTasks[k]) fs::remove_all(work / receiverFolder(units, r), ec);
         }
     }
+    // Array indices are scene and unit numbers: Slurm refuses any at or past MaxArraySize.
+    const int arrayLimit = options.dryRun ? 1001 : maxArraySize();
+    if (!plan.voxelTasks.empty() && plan.voxelTasks.back() >= arrayLimit)
+        throw SettingsError("the job has " + std::to_string(plan.scenes.size()) + " scenes; Slurm's MaxArraySize (" +
+                            std::to_string(arrayLimit) + ") allows array indices below it: split the job");
+    for (size_t k = 0; k < plan.scenes.size(); ++k)
+        if (!plan.receiverTasks[k].empty() && plan.receiverTasks[k].back() >= arrayLimit)
+            throw SettingsError(plan.scenes[k].scenePath + ": " + std::to_string(plan.scenes[k].units.receiverCount()) +
+                                " receiver units; Slurm's MaxArraySize (" + std::to_string(arrayLimit) +
+                                ") allows array indices below it: lower --lightmap-bands");
+
     const fs::path logs = fs::path(plan.workDir) / "logs", scripts = fs::path(plan.workDir) / "scripts";
+    plan.voxelJob.clear();
+    plan.receiverJobs.assign(plan.scenes.size(), "");
+    plan.mergeJob.clear();
     if (!options.dryRun) {
         fs::remove(fs::path(plan.workDir) / kSummaryFile);  // the last merge's, not this one's
         fs::create_directories(logs);
         fs::create_directories(scripts);
+        // The plan is on disk before any unit can start: every unit reads it first.
+        writePlan(plan);
     }
     const std::string limit = options.maxParallel > 0 ? "%" + std::to_string(options.maxParallel) : "";
     const auto writeScript = [&](const std::string& file, const std::string& text) {
@@ -332,81 +489,101 @@ std::vector<std::string> submit(ClusterPlan& plan, const SlurmOptions& options) 
         fs::permissions(path, fs::perms::owner_exec, fs::perm_options::add);
         return path.string();
     };
+    // Jobs are submitted held and released together once all are in: a submission that fails
+    // half-way cancels what it submitted and leaves nothing running.
+    std::vector<std::string> submitted;
     const auto run = [&](const std::string& script, std::vector<std::string> extra, const std::string& placeholder) {
         std::string command = "sbatch --parsable";
         for (const std::string& e : extra) command += " " + e;
         lines.push_back(command + " " + script);
-        return options.dryRun ? placeholder : submitScript(script, extra);
+        if (options.dryRun) return placeholder;
+        extra.insert(extra.begin(), "--hold");
+        submitted.push_back(submitScript(script, extra));
+        return submitted.back();
     };
-
-    // Voxel units: one array over the scenes whose voxel unit has no result.
-    plan.voxelTasks.clear();
-    for (size_t k = 0; k < plan.scenes.size(); ++k) {
-        const std::optional<UnitRecord> done =
-            readUnitRecord((fs::path(sceneWorkFolder(plan.workDir, k)) / kVoxelFolder).string());
-        if (!(done && done->ok)) plan.voxelTasks.push_back(int(k));
-    }
-    plan.voxelJob.clear();
-    std::vector<std::string> all;
-    if (!plan.voxelTasks.empty()) {
-        const std::string script = writeScript(
-            "voxel.sh", batchScript(plan, options, "voxlight-voxel", (logs / "voxel-%a.out").string(),
-                                    "--unit voxel --scene \"$SLURM_ARRAY_TASK_ID\""));
-        plan.voxelJob = run(script, {"--array=" + listText(plan.voxelTasks) + limit}, "<voxel job>");
-        all.push_back(plan.voxelJob);
-    }
-    // Receivers: per scene an array after its voxel unit.
-    plan.receiverJobs.assign(plan.scenes.size(), "");
-    plan.receiverTasks.assign(plan.scenes.size(), {});
-    for (size_t k = 0; k < plan.scenes.size(); ++k) {
-        const SceneUnits& units = plan.scenes[k].units;
-        for (int r = 0; r < units.receiverCount(); ++r) {
-            const std::optional<UnitRecord> done =
-                readUnitRecord((fs::path(sceneWorkFolder(plan.workDir, k)) / receiverFolder(units, r)).string());
-            if (!(done && done->ok)) plan.receiverTasks[k].push_back(r);
+    try {
+        // Voxel units: one array over the scenes whose voxel unit has no result.
+        if (!plan.voxelTasks.empty()) {
+            const std::string script = writeScript(
+                "voxel.sh", batchScript(plan, options, "voxlight-voxel", (logs / "voxel-%a.out").string(),
+                                        "--unit voxel --scene \"$SLURM_ARRAY_TASK_ID\""));
+            plan.voxelJob = run(script, {"--array=" + listText(plan.voxelTasks) + limit}, "<voxel job>");
         }
-        if (plan.receiverTasks[k].empty()) continue;
-        const std::string scene = std::to_string(k);
-        const std::string script = writeScript(
-            "scene-" + scene + "-receivers.sh",
-            batchScript(plan, options, "voxlight-receivers-" + scene,
-                        (logs / ("scene-" + scene + "-receiver-%a.out")).string(),
-                        "--unit receiver --scene " + scene + " --index \"$SLURM_ARRAY_TASK_ID\""));
-        std::vector<std::string> extra{"--array=" + listText(plan.receiverTasks[k]) + limit};
-        if (std::find(plan.voxelTasks.begin(), plan.voxelTasks.end(), int(k)) != plan.voxelTasks.end()) {
-            extra.push_back("--dependency=afterok:" + plan.voxelJob + "_" + scene);
-            extra.push_back("--kill-on-invalid-dep=yes");
+        // Receivers: per scene an array after its voxel unit.
+        for (size_t k = 0; k < plan.scenes.size(); ++k) {
+            if (plan.receiverTasks[k].empty()) continue;
+            const std::string scene = std::to_string(k);
+            const std::string script = writeScript(
+                "scene-" + scene + "-receivers.sh",
+                batchScript(plan, options, "voxlight-receivers-" + scene,
+                            (logs / ("scene-" + scene + "-receiver-%a.out")).string(),
+                            "--unit receiver --scene " + scene + " --index \"$SLURM_ARRAY_TASK_ID\""));
+            std::vector<std::string> extra{"--array=" + listText(plan.receiverTasks[k]) + limit};
+            if (std::find(plan.voxelTasks.begin(), plan.voxelTasks.end(), int(k)) != plan.voxelTasks.end()) {
+                extra.push_back("--dependency=afterok:" + plan.voxelJob + "_" + scene);
+                extra.push_back("--kill-on-invalid-dep=yes");
+            }
+            plan.receiverJobs[k] = run(script, extra, "<scene " + scene + " receivers job>");
         }
-        plan.receiverJobs[k] = run(script, extra, "<scene " + scene + " receivers job>");
-        all.push_back(plan.receiverJobs[k]);
-    }
-    // The merge, after every unit however it ended.
-    const std::string script =
-        writeScript("merge.sh", batchScript(plan, options, "voxlight-merge", (logs / "merge.out").string(), "--unit merge"));
-    std::vector<std::string> extra;
-    if (!all.empty()) {
-        std::string dependency = "--dependency=afterany";
-        for (const std::string& id : all) dependency += ":" + id;
-        extra.push_back(dependency);
-    }
-    plan.mergeJob = run(script, extra, "<merge job>");
-    if (!options.dryRun) {
+        // The merge, after every unit however it ended.
+        std::vector<std::string> all = submitted;
+        if (options.dryRun) {
+            if (!plan.voxelJob.empty()) all.push_back(plan.voxelJob);
+            for (const std::string& id : plan.receiverJobs)
+                if (!id.empty()) all.push_back(id);
+        }
+        const std::string script = writeScript(
+            "merge.sh", batchScript(plan, options, "voxlight-merge", (logs / "merge.out").string(), "--unit merge"));
+        std::vector<std::string> extra;
+        if (!all.empty()) {
+            std::string dependency = "--dependency=afterany";
+            for (const std::string& id : all) dependency += ":" + id;
+            extra.push_back(dependency);
+        }
+        plan.mergeJob = run(script, extra, "<merge job>");
+        if (options.dryRun) return lines;
         writePlan(plan);
-        size_t units = 0;
-        for (const auto& tasks : plan.receiverTasks) units += tasks.size();
-        lines.push_back("submitted " + std::to_string(plan.voxelTasks.size()) + " voxel unit(s), " +
-                        std::to_string(units) + " receiver unit(s) and the merge (job " + plan.mergeJob +
-                        ") of " + std::to_string(plan.scenes.size()) + " scene(s); follow it with: voxlight bake "
-                        "--slurm-status " + fs::path(plan.workDir).parent_path().string());
+        std::vector<std::string> release{"scontrol", "release"};
+        release.insert(release.end(), submitted.begin(), submitted.end());
+        const ProgramResult released = runProgram(release);
+        if (released.status != 0)
+            throw Error("scontrol release failed: " + trimmed(released.err.empty() ? released.out : released.err));
+    } catch (...) {
+        if (!submitted.empty()) {
+            std::vector<std::string> cancel{"scancel"};
+            cancel.insert(cancel.end(), submitted.begin(), submitted.end());
+            runProgram(cancel);
+            plan.voxelJob.clear();
+            plan.receiverJobs.assign(plan.scenes.size(), "");
+            plan.mergeJob.clear();
+            if (!options.dryRun) writePlan(plan);
+        }
+        throw;
     }
+    size_t units = 0;
+    for (const auto& tasks : plan.receiverTasks) units += tasks.size();
+    lines.push_back("submitted " + std::to_string(plan.voxelTasks.size()) + " voxel unit(s), " + std::to_string(units) +
+                    " receiver unit(s) and the merge (job " + plan.mergeJob + ") of " +
+                    std::to_string(plan.scenes.size()) + " scene(s); follow it with: voxlight bake --slurm-status " +
+                    fs::path(plan.workDir).parent_path().string());
     return lines;
 }
 
 std::vector<std::string> slurmStatus(const std::string& outputRoot) {
     const std::string workDir = workFolder(outputRoot);
     const ClusterPlan plan = readPlan(workDir);
-    const std::map<std::string, std::string> jobs = queue();
+    std::string queueError;
+    const std::optional<std::map<std::string, std::string>> queued = queue(&queueError);
     std::vector<std::string> lines;
+    if (!queued) lines.push_back("(" + queueError + ": units without a result are shown as unknown)");
+    const auto jobState = [&](const std::string& job) -> std::string {
+        if (!queued) return "unknown";
+        const auto entry = queued->find(job);
+        if (entry != queued->end()) return queuedText(entry->second);
+        const std::string finished = finishedJobState(job);
+        return "failed: no result" + (finished.empty() ? std::string(" (killed, out of time, or its node failed)")
+                                                       : std::string(": Slurm says ") + finished);
+    };
     std::string voxelFailed;  // the scene's, while its units are listed
     const auto stateOf = [&](const std::string& folder, const std::string& job, bool submitted) -> std::string {
         const std::optional<UnitRecord> record = readUnitRecord(folder);
@@ -415,18 +592,18 @@ std::vector<std::string> slurmStatus(const std::string& outputRoot) {
             std::snprintf(seconds, sizeof seconds, "%.2f s", record->wallSeconds);
             return record->ok ? "done on " + record->host + " in " + seconds : "failed: " + record->error;
         }
-        if (!submitted) return "not submitted";
-        const auto queued = jobs.find(job);
-        if (queued == jobs.end() && !voxelFailed.empty()) return "not run: its voxel unit failed";
-        if (queued != jobs.end()) return queuedText(queued->second);
-        const std::string finished = finishedJobState(job);
-        return "failed: no result" + (finished.empty() ? std::string(" (killed, out of time, or its node failed)")
-                                                       : std::string(": Slurm says ") + finished);
+        if (!submitted || job.empty() || job[0] == '_') return "not submitted";
+        if (queued && queued->find(job) == queued->end() && !voxelFailed.empty()) return "not run: its voxel unit failed";
+        return jobState(job);
     };
     for (size_t k = 0; k < plan.scenes.size(); ++k) {
         const ClusterPlan::Scene& scene = plan.scenes[k];
         const fs::path work = sceneWorkFolder(workDir, k);
         lines.push_back(scene.scenePath + " -> " + scene.outputDir);
+        if (!scene.planError.empty()) {
+            lines.push_back("  planning failed: " + scene.planError);
+            continue;
+        }
         const bool voxelSubmitted =
             std::find(plan.voxelTasks.begin(), plan.voxelTasks.end(), int(k)) != plan.voxelTasks.end();
         voxelFailed.clear();
@@ -448,24 +625,25 @@ std::vector<std::string> slurmStatus(const std::string& outputRoot) {
         lines.push_back("merge: done: " + std::to_string(ok) + " scene(s) published, " + std::to_string(failed) +
                         " failed");
         for (const json& s : summary.at("scenes"))
-            if (!s.at("ok").get<bool>())
-                lines.push_back("  " + s.at("error").get<std::string>());
+            if (!s.at("ok").get<bool>()) lines.push_back("  " + s.at("error").get<std::string>());
     } else {
-        const auto queued = jobs.find(plan.mergeJob);
-        lines.push_back("merge: " + (queued != jobs.end() ? queuedText(queued->second)
-                                                          : "failed: no result" + [&] {
-                                                                const std::string f = finishedJobState(plan.mergeJob);
-                                                                return f.empty() ? std::string() : ": Slurm says " + f;
-                                                            }()));
+        lines.push_back("merge: " + (plan.mergeJob.empty() ? std::string("not submitted") : jobState(plan.mergeJob)));
     }
     return lines;
 }
 
 bool waitForMerge(const ClusterPlan& plan, double pollSeconds) {
     if (plan.mergeJob.empty()) return false;
-    for (;;) {
-        const std::map<std::string, std::string> jobs = queue();
-        if (jobs.find(plan.mergeJob) == jobs.end()) return true;
+    for (int failures = 0;;) {
+        std::string error;
+        const std::optional<std::map<std::string, std::string>> jobs = queue(&error);
+        if (!jobs) {
+            // A busy controller times out now and then; a minute of failures is an error.
+            if (++failures * pollSeconds > 60.0) throw Error("cannot follow the merge job " + plan.mergeJob + ": " + error);
+        } else {
+            failures = 0;
+            if (jobs->find(plan.mergeJob) == jobs->end()) return true;
+        }
         std::this_thread::sleep_for(std::chrono::duration<double>(pollSeconds));
     }
 }

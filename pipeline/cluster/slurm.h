@@ -49,6 +49,7 @@ struct ClusterPlan {
     struct Scene {
         std::string scenePath, outputDir, fingerprint;
         SceneUnits units;
+        std::string planError;  // why planning failed (the scene did not load): nothing runs, the merge reports it
     };
     std::vector<Scene> scenes;
     // Slurm job ids, once submitted ("" where nothing was submitted).
@@ -65,8 +66,8 @@ void writePlan(const ClusterPlan& plan);
 // InputError naming the file when it is missing or not a plan.
 ClusterPlan readPlan(const std::string& workDir);
 
-// A scene's fingerprint: voxlight's version, the job's settings, the scene's and its folder's
-// files (names, sizes, modification times) and those of `jobFiles`.
+// A scene's fingerprint: voxlight's version, the job's settings, and the names, sizes and
+// modification times of the scene file, the files it points at, the sky image and `jobFiles`.
 std::string fingerprint(const BakeJob& job, const std::vector<std::string>& jobFiles);
 
 // Submits what is not done of `plan` (whose command, scenes and binary are set) and writes
@@ -76,7 +77,8 @@ std::vector<std::string> submit(ClusterPlan& plan, const SlurmOptions& options);
 // Per scene and unit: done, failed and why, queued and why, running, or gone without a result.
 std::vector<std::string> slurmStatus(const std::string& outputRoot);
 
-// Waits until the plan's merge job has left the queue; false if it never was submitted.
+// Waits until the plan's merge job has left the queue; false if it never was submitted. Error
+// when squeue keeps failing.
 bool waitForMerge(const ClusterPlan& plan, double pollSeconds = 1.0);
 
 // The merge's summary (written by the merge unit): per scene, ok or the error.

@@ -4,7 +4,6 @@
 #include "core/error.h"
 
 #include <fstream>
-#include <iterator>
 
 namespace vl::cluster {
 namespace {
@@ -12,9 +11,9 @@ namespace {
 constexpr char kMagic[] = "VOXLIGHT-UNIT";
 constexpr uint32_t kVersion = 1;
 
-uint64_t fnv1a(const std::vector<uint8_t>& bytes) {
+uint64_t fnv1a(const uint8_t* bytes, size_t size) {
     uint64_t hash = 0xcbf29ce484222325ull;
-    for (uint8_t b : bytes) hash = (hash ^ b) * 0x100000001b3ull;
+    for (size_t i = 0; i < size; ++i) hash = (hash ^ bytes[i]) * 0x100000001b3ull;
     return hash;
 }
 
@@ -42,7 +41,7 @@ void writeUnitFile(const UnitFile& file, const std::string& path) {
         put(bytes, uint64_t(array.size()));
         bytes.insert(bytes.end(), array.begin(), array.end());
     }
-    put(bytes, fnv1a(bytes));
+    put(bytes, fnv1a(bytes.data(), bytes.size()));
     writeAtomically(path, [&](const std::string& temp) {
         std::ofstream out(temp, std::ios::binary);
         out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
@@ -51,20 +50,23 @@ void writeUnitFile(const UnitFile& file, const std::string& path) {
 }
 
 UnitFile readUnitFile(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
     if (!in) throw InputError(path + ": cannot be opened");
-    const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::streamsize size = in.tellg();
+    std::vector<uint8_t> bytes(size > 0 ? size_t(size) : 0);
+    in.seekg(0);
+    if (!in.read(reinterpret_cast<char*>(bytes.data()), size)) throw InputError(path + ": cannot be read");
     const size_t magic = sizeof kMagic - 1;
     if (bytes.size() < magic + 4 + 8 + 4 + 8 || std::memcmp(bytes.data(), kMagic, magic) != 0)
         throw InputError(path + ": not a voxlight unit file");
-    const std::vector<uint8_t> body(bytes.begin(), bytes.end() - 8);
+    const size_t bodySize = bytes.size() - 8;  // the checksum covers all before it
     uint64_t stored = 0;
-    std::memcpy(&stored, bytes.data() + bytes.size() - 8, 8);
-    if (stored != fnv1a(body)) throw InputError(path + ": damaged (checksum mismatch)");
+    std::memcpy(&stored, bytes.data() + bodySize, 8);
+    if (stored != fnv1a(bytes.data(), bodySize)) throw InputError(path + ": damaged (checksum mismatch)");
     size_t at = magic;
     const auto get = [&](auto& value) {
-        if (at + sizeof value > body.size()) throw InputError(path + ": truncated");
-        std::memcpy(&value, body.data() + at, sizeof value);
+        if (at + sizeof value > bodySize) throw InputError(path + ": truncated");
+        std::memcpy(&value, bytes.data() + at, sizeof value);
         at += sizeof value;
     };
     uint32_t version = 0;
@@ -73,7 +75,7 @@ UnitFile readUnitFile(const std::string& path) {
         throw InputError(path + ": unit file version " + std::to_string(version) + ", this voxlight reads " +
                          std::to_string(kVersion));
     const auto span = [&](uint64_t n) {
-        if (n > body.size() - at) throw InputError(path + ": truncated");
+        if (n > bodySize - at) throw InputError(path + ": truncated");
         const size_t begin = at;
         at += size_t(n);
         return begin;
@@ -82,16 +84,20 @@ UnitFile readUnitFile(const std::string& path) {
     get(headerSize);
     const size_t headerBegin = span(headerSize);
     UnitFile file;
-    file.header = nlohmann::json::parse(body.begin() + long(headerBegin), body.begin() + long(headerBegin + headerSize));
+    try {
+        file.header = nlohmann::json::parse(bytes.begin() + long(headerBegin), bytes.begin() + long(headerBegin + headerSize));
+    } catch (const std::exception& e) {
+        throw InputError(path + ": its header is not JSON (" + e.what() + ")");
+    }
     uint32_t count = 0;
     get(count);
     for (uint32_t k = 0; k < count; ++k) {
         uint64_t n = 0;
         get(n);
         const size_t begin = span(n);
-        file.arrays.emplace_back(body.begin() + long(begin), body.begin() + long(begin + n));
+        file.arrays.emplace_back(bytes.begin() + long(begin), bytes.begin() + long(begin + n));
     }
-    if (at != body.size()) throw InputError(path + ": trailing bytes");
+    if (at != bodySize) throw InputError(path + ": trailing bytes");
     return file;
 }
 

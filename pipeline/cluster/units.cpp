@@ -51,8 +51,28 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+double unixSeconds() {
+    return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+void writeRecord(const fs::path& folder, const UnitRecord& record, double startedAt) {
+    const json j = {{"ok", record.ok},
+                    {"error", record.error},
+                    {"seconds", record.seconds},
+                    {"wall_seconds", record.wallSeconds},
+                    {"started_at", startedAt},  // Unix time: where the scheduler's gaps show
+                    {"ended_at", unixSeconds()},
+                    {"host", record.host},
+                    {"slurm_job", record.slurmJob},
+                    {"peak_memory_bytes", record.peakMemoryBytes}};
+    std::ofstream out(folder / kRecordFile);
+    out << j.dump(2) << '\n';
+    if (!out) throw Error("cannot write " + (folder / kRecordFile).string());
+}
+
 // Runs `work` into a staging folder beside sceneWork/folder, records how it went in
 // unit.json there and renames the staging folder into place (an older result goes first).
+// Whatever `work` throws is recorded, never thrown.
 template <typename Work>
 UnitRecord runUnit(const std::string& sceneWork, const std::string& folder, Work&& work) {
     UnitRecord record;
@@ -62,32 +82,24 @@ UnitRecord runUnit(const std::string& sceneWork, const std::string& folder, Work
     const fs::path staging =
         fs::path(sceneWork) / (folder + ".partial-" + record.host + "-" + std::to_string(::getpid()));
     const auto start = std::chrono::steady_clock::now();
-    const auto unixSeconds = [] {
-        return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
-    };
     const double startedAt = unixSeconds();
-    fs::remove_all(staging);
-    fs::create_directories(staging);
     try {
+        fs::remove_all(staging);
+        fs::create_directories(staging);
         work(staging, record);
         record.ok = true;
     } catch (const std::exception& e) {
         record.ok = false;
         record.error = e.what();
+    } catch (...) {
+        record.ok = false;
+        record.error = "the " + folder + " unit failed with an exception that is not an error voxlight knows";
     }
     record.peakMemoryBytes = peakResidentBytes();
     record.wallSeconds = secondsSince(start);
-    const json j = {{"ok", record.ok},           {"error", record.error}, {"seconds", record.seconds},
-                    {"wall_seconds", record.wallSeconds},
-                    {"started_at", startedAt},  // Unix time: where the scheduler's gaps show
-                    {"ended_at", unixSeconds()},
-                    {"host", record.host},       {"slurm_job", record.slurmJob},
-                    {"peak_memory_bytes", record.peakMemoryBytes}};
-    {
-        std::ofstream out(staging / kRecordFile);
-        out << j.dump(2) << '\n';
-        if (!out) throw Error("cannot write " + (staging / kRecordFile).string());
-    }
+    std::error_code ec;
+    fs::create_directories(staging, ec);
+    writeRecord(staging, record, startedAt);
     fs::remove_all(target);
     fs::rename(staging, target);
     return record;
@@ -157,8 +169,8 @@ SceneUnits planSceneUnits(const BakeJob& job, int bands, int cameras) {
     const GeneratedUvs generated = generateSharedAtlasUvs(scene, silent, quiet);
     for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, generated.lightmap, quiet)) {
         const double texels = double(atlas.receivers.width) * atlas.receivers.height;
-        units.atlases.push_back(
-            {atlas.name, bands > 0 ? bands : std::max(1, static_cast<int>(std::ceil(texels / kTexelsPerBand)))});
+        const int wanted = bands > 0 ? bands : static_cast<int>(std::ceil(texels / kTexelsPerBand));
+        units.atlases.push_back({atlas.name, std::clamp(wanted, 1, std::max(1, atlas.receivers.height))});
     }
     return units;
 }
@@ -201,6 +213,10 @@ std::optional<UnitRecord> readUnitRecord(const std::string& unitFolder) {
     }
 }
 
+UnitRecord recordUnitFailure(const std::string& sceneWork, const std::string& folder, const std::string& error) {
+    return runUnit(sceneWork, folder, [&](const fs::path&, UnitRecord&) { throw Error(error); });
+}
+
 UnitRecord runVoxelUnit(const BakeJob& job, const std::string& sceneWork) {
     return runUnit(sceneWork, kVoxelFolder, [&](const fs::path& dir, UnitRecord& record) {
         const BakeSettings& settings = job.settings;
@@ -220,8 +236,9 @@ UnitRecord runVoxelUnit(const BakeJob& job, const std::string& sceneWork) {
 
 UnitRecord runReceiverUnit(const BakeJob& job, const std::string& sceneWork, const SceneUnits& units, int receiver) {
     if (receiver < 0 || receiver >= units.receiverCount())
-        throw SettingsError("receiver unit " + std::to_string(receiver) + " of a scene with " +
-                            std::to_string(units.receiverCount()));
+        return recordUnitFailure(sceneWork, "receiver-" + std::to_string(receiver),
+                                 "receiver unit " + std::to_string(receiver) + " of a scene with " +
+                                     std::to_string(units.receiverCount()));
     return runUnit(sceneWork, receiverFolder(units, receiver), [&](const fs::path& dir, UnitRecord& record) {
         const BakeSettings& settings = job.settings;
         const VoxelState state = finishedVoxelState(sceneWork);

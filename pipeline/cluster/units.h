@@ -71,6 +71,9 @@ std::optional<UnitRecord> readUnitRecord(const std::string& unitFolder);
 
 // Each runs one unit into `sceneWork`/<its folder> and returns its record; a failure is
 // recorded in the folder, not thrown.
+// A unit that cannot even start (its plan unreadable, its scene changed since submission):
+// its folder records `error`, so --slurm-status and the merge give the real reason.
+UnitRecord recordUnitFailure(const std::string& sceneWork, const std::string& folder, const std::string& error);
 UnitRecord runVoxelUnit(const BakeJob& job, const std::string& sceneWork);
 UnitRecord runReceiverUnit(const BakeJob& job, const std::string& sceneWork, const SceneUnits& units, int receiver);
 

@@ -111,10 +111,12 @@ TEST_CASE("A three-scene job baked on a one-node Slurm cluster is the local bake
     CHECK(done == 15);  // 3 voxel units; 2 bands per atlas (2 + 1 + 1 atlases); cameras 1 + 1 + 2
 
     // Scenes that fail in their voxel units under --strict (a black scene; the classroom's
-    // generated charts outgrowing the 64² atlas): their receivers never run, the merge
-    // publishes the other scene and names them, and the command fails.
+    // generated charts outgrowing the 64² atlas), and one that is missing (it fails to plan, so
+    // none of its units runs): their receivers never run, the merge publishes the other scene
+    // and names them, and the command fails.
     nlohmann::json j = nlohmann::json::parse(vl::test::fileBytes(job));
     j["scenes"][1].erase("sky");
+    j["scenes"].push_back({{"path", (root / "missing.gltf").string()}});
     const fs::path strictJob = root / "strict.json";
     std::ofstream(strictJob) << j.dump(2);
     const Run failed = run(kVoxlight + " bake " + strictJob.string() + " -o " + (root / "strict").string() +
@@ -124,7 +126,8 @@ TEST_CASE("A three-scene job baked on a one-node Slurm cluster is the local bake
     CHECK_THAT(failed.output, Catch::Contains("voxel: failed: ") && Catch::Contains("window_room.gltf: the scene has no lights"));
     CHECK_THAT(failed.output, Catch::Contains("not run: its voxel unit failed"));
     CHECK_THAT(failed.output, Catch::Contains("classroom.gltf: the generated lightmap UVs' 859 charts need"));
-    CHECK_THAT(failed.output, Catch::Contains("merge: done: 1 scene(s) published, 2 failed"));
+    CHECK_THAT(failed.output, Catch::Contains("planning failed: ") && Catch::Contains("missing.gltf"));
+    CHECK_THAT(failed.output, Catch::Contains("merge: done: 1 scene(s) published, 3 failed"));
     CHECK(fs::exists(root / "strict" / "cornell_box_point" / "bake.json"));
     CHECK_FALSE(fs::exists(root / "strict" / "window_room" / "bake.json"));
 }

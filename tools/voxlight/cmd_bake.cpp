@@ -37,14 +37,16 @@ struct BakeOptions {
 cluster::PlannedCommand absoluteCommand(cluster::PlannedCommand command) {
     if (command.inputs.empty()) command.inputs.push_back(defaultScenePath());
     for (std::string& input : command.inputs) input = fs::absolute(input).lexically_normal().string();
-    command.output = fs::absolute(command.output.empty() ? "output" : command.output).lexically_normal().string();
+    // No -o: the scenes go where a local bake puts them (output/<name>, relative to the folder
+    // the units run in, which is this one).
+    if (!command.output.empty()) command.output = fs::absolute(command.output).lexically_normal().string();
     return command;
 }
 
 void submitToSlurm(const BakeOptions& options) {
     cluster::ClusterPlan plan;
     plan.command = absoluteCommand(options.command);
-    plan.workDir = cluster::workFolder(plan.command.output);
+    plan.workDir = cluster::workFolder(plan.command.output.empty() ? "output" : plan.command.output);
     plan.voxlight = fs::read_symlink("/proc/self/exe").string();
     plan.chdir = fs::current_path().string();
     std::vector<std::string> jobFiles;
@@ -57,10 +59,11 @@ void submitToSlurm(const BakeOptions& options) {
         scene.fingerprint = cluster::fingerprint(job, jobFiles);
         try {
             scene.units = cluster::planSceneUnits(job, options.slurmOptions.bands);
-        } catch (const std::exception&) {
-            // A scene that does not load gets no receiver units: its voxel unit fails, saying
-            // why as a local bake does, and the merge reports it.
-            scene.units = cluster::SceneUnits{};
+        } catch (const std::exception& e) {
+            // A scene that does not plan (its file is missing or broken) runs no unit; the merge
+            // reports it, with the error a local bake gives, and the other scenes go on.
+            scene.planError = e.what();
+            std::fprintf(stderr, "error: %s\n", e.what());
         }
         plan.scenes.push_back(scene);
     }
@@ -68,7 +71,8 @@ void submitToSlurm(const BakeOptions& options) {
     std::fflush(stdout);
     if (!options.wait || options.slurmOptions.dryRun) return;
     cluster::waitForMerge(plan);
-    for (const std::string& line : cluster::slurmStatus(plan.command.output)) std::printf("%s\n", line.c_str());
+    for (const std::string& line : cluster::slurmStatus(fs::path(plan.workDir).parent_path().string()))
+        std::printf("%s\n", line.c_str());
     const nlohmann::json summary = cluster::readSummary(plan.workDir);
     if (summary.is_null()) throw Error("the merge job ended without a summary: see " + plan.workDir + "/logs/merge.out");
     for (const auto& scene : summary.at("scenes"))
@@ -133,7 +137,7 @@ void addBakeCommand(CLI::App& app) {
         ->check(CLI::NonNegativeNumber)
         ->group("Cluster");
     cmd->add_option("--lightmap-bands", options->slurmOptions.bands,
-                    "units per scene's lightmaps, each a band of rows of every atlas (0: one per 512 x 512 texels of the largest atlas)")
+                    "units per lightmap atlas, each a band of its rows (0: one per 512 x 512 texels of the atlas)")
         ->check(CLI::Range(0, 4096))
         ->group("Cluster");
     cmd->add_flag("--slurm-dry-run", options->slurmOptions.dryRun, "print the batch scripts and sbatch commands only")
