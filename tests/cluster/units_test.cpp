@@ -1,6 +1,7 @@
 // A bake split into units (cluster/units.h) and run unit by unit in this process writes the
 // same bytes as the local bake of the same job; a failed unit fails its scene with its error.
 #include "bake/job_file.h"
+#include "cluster/slurm.h"
 #include "cluster/units.h"
 #include "cluster/voxel_state.h"
 #include "core/error.h"
@@ -10,6 +11,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -149,4 +151,34 @@ TEST_CASE("A damaged voxel state is refused, naming the file", "[cluster]") {
     CHECK_THAT(receiver.error, Catch::Contains("damaged"));
     std::ofstream(state, std::ios::binary) << data.substr(0, 100);
     CHECK_THROWS_WITH(readVoxelState(state.string()), Catch::Contains(state.string()));
+}
+
+TEST_CASE("A unit whose scene changed since submission records why and does not run", "[cluster]") {
+    // The plan's fingerprint is not the scene's any more (as after an edit): `voxlight
+    // bake-unit` refuses to bake it and leaves the reason in the unit's folder, where
+    // --slurm-status and the merge read it.
+    const fs::path root = test::tempDir("cluster-changed");
+    fs::remove_all(root);
+    ClusterPlan plan;
+    plan.command.inputs = {test::sourceDir() + "/scenes/cornell_box.gltf"};
+    plan.command.output = (root / "out").string();
+    plan.command.settings = {{"resolution", "16"}};
+    plan.workDir = workFolder(plan.command.output);
+    plan.voxlight = std::string(VOXLIGHT_BINARY_DIR) + "/voxlight";
+    plan.chdir = root.string();
+    ClusterPlan::Scene scene;
+    scene.scenePath = plan.command.inputs[0];
+    scene.outputDir = plan.command.output;
+    scene.fingerprint = "0000000000000000";
+    plan.scenes.push_back(scene);
+    plan.receiverTasks.assign(1, {});
+    plan.receiverJobs.assign(1, "");
+    writePlan(plan);
+    const std::string command = plan.voxlight + " bake-unit " + plan.workDir + " --unit voxel --scene 0 2>/dev/null";
+    CHECK(std::system(command.c_str()) != 0);
+    const std::optional<UnitRecord> record = readUnitRecord(sceneWorkFolder(plan.workDir, 0) + "/voxel");
+    REQUIRE(record);
+    CHECK_FALSE(record->ok);
+    CHECK_THAT(record->error, Catch::Contains("cornell_box.gltf") && Catch::Contains("changed since the job was submitted"));
+    CHECK_FALSE(fs::exists(sceneWorkFolder(plan.workDir, 0) + "/voxel/voxel-state.vxu"));
 }
