@@ -9,12 +9,16 @@
 // of the light the bounce adds to the direct light is compared between turns (a closed box
 // with albedo 1 keeps all of it: the unturned box's ratio is the reference).
 //
-//   build/accuracy/accuracy_turned_box [--lit] [RESOLUTION …]
+// With --scene FILE a glTF is lit and turned instead (the same way), its meshes whose name
+// holds a --drop text left out: the Cycles Cornell box with and without its blocks, say.
+//
+//   build/accuracy/accuracy_turned_box [--lit] [--scene FILE [--drop TEXT …]] [RESOLUTION …]
 #include "bake/bake.h"
 #include "bake/bake_settings.h"
 #include "bake/ray_gather.h"
 #include "cone/bounces.h"
 #include "lighting/lighting.h"
+#include "scene/gltf_loader.h"
 #include "scene/scene.h"
 #include "voxel/voxelize.h"
 
@@ -74,11 +78,18 @@ Scene turnedBox(const glm::quat& turn, bool lit) {
 int main(int argc, char** argv) {
     std::vector<int> resolutions;
     bool lit = false;
+    std::string sceneFile;
+    std::vector<std::string> drops;
     for (int i = 1; i < argc; ++i) {
-        if (std::string(argv[i]) == "--lit")
+        const std::string arg = argv[i];
+        if (arg == "--lit")
             lit = true;
+        else if (arg == "--scene" && i + 1 < argc)
+            sceneFile = argv[++i], lit = true;
+        else if (arg == "--drop" && i + 1 < argc)
+            drops.push_back(argv[++i]);
         else
-            resolutions.push_back(std::atoi(argv[i]));
+            resolutions.push_back(std::atoi(arg.c_str()));
     }
     if (resolutions.empty()) resolutions = {48, 64, 96};
     const glm::quat turns[] = {
@@ -86,12 +97,32 @@ int main(int argc, char** argv) {
         glm::angleAxis(glm::radians(30.0f), vec3(0.0f, 1.0f, 0.0f)),
         glm::angleAxis(glm::radians(45.0f), glm::normalize(vec3(1.0f, 1.0f, 0.0f))),
         glm::angleAxis(glm::radians(60.0f), glm::normalize(vec3(1.0f, 2.0f, 3.0f))),
+        glm::normalize(glm::quat(-0.346f, 0.464f, 0.175f, 0.796f)),  // accuracy_rotations' turn 1
     };
-    const char* names[] = {"unturned", "30° about Y", "45° about (1,1,0)", "60° about (1,2,3)"};
+    const char* names[] = {"unturned", "30° about Y", "45° about (1,1,0)", "60° about (1,2,3)", "rotations' turn 1"};
+    const int turnCount = sceneFile.empty() ? 4 : 5;
     BakeSettings settings;
     for (int resolution : resolutions)
-        for (int t = 0; t < 4; ++t) {
-            Scene scene = turnedBox(turns[t], lit);
+        for (int t = 0; t < turnCount; ++t) {
+            Scene scene = sceneFile.empty() ? turnedBox(turns[t], lit) : loadGltf(sceneFile);
+            if (!sceneFile.empty()) {
+                std::vector<Mesh> kept;
+                for (Mesh& mesh : scene.meshes) {
+                    bool drop = false;
+                    for (const std::string& d : drops) drop = drop || mesh.name.find(d) != std::string::npos ||
+                                                              mesh.node.find(d) != std::string::npos;
+                    if (!drop) kept.push_back(std::move(mesh));
+                }
+                scene.meshes = std::move(kept);
+                for (Mesh& mesh : scene.meshes) {
+                    for (vec3& p : mesh.positions) p = turns[t] * p;
+                    for (vec3& n : mesh.normals) n = turns[t] * n;
+                }
+                for (Light& light : scene.lights) {
+                    light.position = turns[t] * light.position;
+                    light.direction = turns[t] * light.direction;
+                }
+            }
             VoxelSettings voxel = settings.voxel;
             voxel.resolution = resolution;
             const double h = voxelSizeFor(scene, voxel);
