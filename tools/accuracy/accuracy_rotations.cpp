@@ -5,6 +5,10 @@
 // for every turn. An accuracy measurement, not a test and not a speed figure.
 //
 //   build/accuracy/accuracy_rotations [--turns N] [name=value …]   (bake settings)
+//
+// To compare voxel counts, give `voxel-size` (the box's side over the count: 0.559 m / N), not
+// `resolution`: a resolution counts voxels along the turned box's axis-aligned bounds, up to
+// √3 times its own side, and bakes the turns coarser than the unturned box.
 #include "bake/bake.h"
 #include "bake/bake_settings.h"
 #include "core/image_io.h"
