@@ -1,6 +1,7 @@
 #include "cluster/slurm.h"
 
 #include "core/error.h"
+#include "scene/gltf_loader.h"
 
 #include <algorithm>
 #include <chrono>
@@ -226,25 +227,12 @@ std::vector<fs::path> referencedFiles(const std::string& scenePath) {
     }
     const json gltf = json::parse(text, nullptr, false);
     if (gltf.is_discarded() || !gltf.is_object()) return files;
-    const auto decoded = [](const std::string& uri) {
-        std::string out;
-        for (size_t i = 0; i < uri.size(); ++i) {
-            if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
-                std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
-                out += static_cast<char>(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
-                i += 2;
-            } else {
-                out += uri[i];
-            }
-        }
-        return out;
-    };
     for (const char* key : {"buffers", "images"})
         if (gltf.contains(key) && gltf[key].is_array())
             for (const json& item : gltf[key])
                 if (item.is_object() && item.contains("uri") && item["uri"].is_string()) {
                     const std::string uri = item["uri"].get<std::string>();
-                    if (uri.rfind("data:", 0) != 0) files.push_back(fs::absolute(scenePath).parent_path() / decoded(uri));
+                    if (uri.rfind("data:", 0) != 0) files.push_back(fs::absolute(scenePath).parent_path() / percentDecoded(uri));
                 }
     return files;
 }

@@ -90,21 +90,6 @@ void checkVersionAndExtensions(const std::string& path, const std::string& versi
         }
 }
 
-// URIs are percent-encoded (RFC 3986); "%20" is a space in the file name.
-std::string percentDecoded(const std::string& uri) {
-    std::string out;
-    for (size_t i = 0; i < uri.size(); ++i) {
-        if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
-            std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
-            out += static_cast<char>(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
-            i += 2;
-        } else {
-            out += uri[i];
-        }
-    }
-    return out;
-}
-
 // Where a uri (of `element`, e.g. "buffer 0") may point: data: URIs, and files in the scene's
 // folder or below it, where a link does not lead out; beyond that only when allowed. Other
 // schemes are refused always: tinygltf would read "file:///x" as a relative path.
@@ -849,6 +834,21 @@ bool startsWithGlbMagic(const std::string& path) {
 }
 
 }  // namespace
+
+std::string percentDecoded(const std::string& uri) {
+    std::string out;
+    for (size_t i = 0; i < uri.size(); ++i) {
+        if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
+            std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
+            out += static_cast<char>(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
+            i += 2;
+        } else {
+            out += uri[i];
+        }
+    }
+    return out;
+}
+
 
 const std::vector<std::string>& supportedGltfExtensions() { return kSupportedExtensions; }
 

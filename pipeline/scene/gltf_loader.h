@@ -30,6 +30,9 @@ struct LoadOptions {
 
 Scene loadGltf(const std::string& path, const LoadOptions& options = {});
 
+// A uri's percent-encoding (RFC 3986) undone: "%20" is a space in a file name.
+std::string percentDecoded(const std::string& uri);
+
 // The extensions loadGltf understands; a file that requires any other is refused.
 const std::vector<std::string>& supportedGltfExtensions();
 
