@@ -1,24 +1,18 @@
 #include "cluster/slurm.h"
 
+#include "cluster/slurm_commands.h"
 #include "core/error.h"
-#include "scene/gltf_loader.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
-#include <cstring>
-#include <iterator>
 #include <map>
 #include <optional>
 #include <sstream>
-#include <cerrno>
-#include <fcntl.h>
-#include <poll.h>
 #include <sys/file.h>
-#include <sys/stat.h>
-#include <sys/wait.h>
 #include <thread>
 #include <unistd.h>
 
@@ -27,78 +21,6 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
-
-constexpr const char* kPlanFile = "plan.json";
-constexpr int kPlanVersion = 1;
-
-struct ProgramResult {
-    int status = -1;  // exit code; -1 when it could not run
-    std::string out, err;
-};
-
-// Runs a program with arguments (no shell), collecting its standard output and error (both
-// drained together, so neither pipe fills while the other is read).
-ProgramResult runProgram(const std::vector<std::string>& arguments) {
-    int outPipe[2], errPipe[2];
-    if (::pipe2(outPipe, O_CLOEXEC) != 0) return {};
-    if (::pipe2(errPipe, O_CLOEXEC) != 0) {
-        ::close(outPipe[0]);
-        ::close(outPipe[1]);
-        return {};
-    }
-    std::vector<char*> argv;
-    for (const std::string& a : arguments) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    const pid_t pid = ::fork();
-    if (pid == 0) {
-        ::dup2(outPipe[1], STDOUT_FILENO);
-        ::dup2(errPipe[1], STDERR_FILENO);
-        ::execvp(argv[0], argv.data());
-        ::_exit(127);
-    }
-    ::close(outPipe[1]);
-    ::close(errPipe[1]);
-    ProgramResult result;
-    if (pid < 0) {
-        ::close(outPipe[0]);
-        ::close(errPipe[0]);
-        return result;
-    }
-    pollfd fds[2] = {{outPipe[0], POLLIN, 0}, {errPipe[0], POLLIN, 0}};
-    std::string* sinks[2] = {&result.out, &result.err};
-    for (int open = 2; open > 0;) {
-        if (::poll(fds, 2, -1) < 0) {
-            if (errno == EINTR) continue;
-            break;
-        }
-        for (int k = 0; k < 2; ++k) {
-            if (fds[k].fd < 0 || !(fds[k].revents & (POLLIN | POLLHUP | POLLERR))) continue;
-            char buffer[4096];
-            const ssize_t n = ::read(fds[k].fd, buffer, sizeof buffer);
-            if (n > 0) {
-                sinks[k]->append(buffer, size_t(n));
-            } else if (n == 0 || errno != EINTR) {
-                ::close(fds[k].fd);
-                fds[k].fd = -1;
-                --open;
-            }
-        }
-    }
-    for (const pollfd& f : fds)
-        if (f.fd >= 0) ::close(f.fd);
-    int status = 0;
-    while (::waitpid(pid, &status, 0) < 0)
-        if (errno != EINTR) return result;
-    result.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return result;
-}
-
-std::string trimmed(std::string text) {
-    while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.pop_back();
-    size_t start = 0;
-    while (start < text.size() && std::isspace(static_cast<unsigned char>(text[start]))) ++start;
-    return text.substr(start);
-}
 
 std::string shellQuoted(const std::string& text) {
     std::string out = "'";
@@ -117,12 +39,6 @@ std::string listText(const std::vector<int>& values) {
         k = end + 1;
     }
     return out;
-}
-
-json sceneUnitsJson(const SceneUnits& units) {
-    json atlases = json::array();
-    for (const SceneUnits::Atlas& atlas : units.atlases) atlases.push_back({{"name", atlas.name}, {"bands", atlas.bands}});
-    return {{"atlases", atlases}, {"cameras", units.cameras}};
 }
 
 bool sameUnits(const SceneUnits& a, const SceneUnits& b) {
@@ -148,95 +64,6 @@ std::string batchScript(const ClusterPlan& plan, const SlurmOptions& options, co
     return s.str();
 }
 
-// sbatch's job id, or an Error with what sbatch said.
-std::string submitScript(const std::string& scriptPath, const std::vector<std::string>& extra) {
-    std::vector<std::string> arguments{"sbatch", "--parsable"};
-    arguments.insert(arguments.end(), extra.begin(), extra.end());
-    arguments.push_back(scriptPath);
-    const ProgramResult r = runProgram(arguments);
-    if (r.status == 127 || r.status == -1)
-        throw Error("cannot run sbatch: is Slurm's client installed (Debian: apt-get install slurm-client) and on PATH?");
-    const std::string id = trimmed(r.out.substr(0, r.out.find(';')));
-    if (r.status != 0 || id.empty() || id.find_first_not_of("0123456789") != std::string::npos)
-        throw Error("sbatch refused " + scriptPath + ": " + trimmed(r.err.empty() ? r.out : r.err));
-    return id;
-}
-
-// This user's jobs in the queue, by id ("123", "123_4"): "STATE|REASON|NODES". Nothing when
-// squeue fails (`error` then says why).
-std::optional<std::map<std::string, std::string>> queue(std::string* error = nullptr) {
-    const ProgramResult r = runProgram({"squeue", "--me", "-h", "-r", "-o", "%i|%T|%r|%N"});
-    if (r.status != 0) {
-        if (error)
-            *error = r.status == 127 || r.status == -1 ? "squeue cannot run (is Slurm's client installed?)"
-                                                       : "squeue failed: " + trimmed(r.err.empty() ? r.out : r.err);
-        return std::nullopt;
-    }
-    std::map<std::string, std::string> jobs;
-    std::istringstream lines(r.out);
-    for (std::string line; std::getline(lines, line);) {
-        const size_t bar = line.find('|');
-        if (bar != std::string::npos) jobs[trimmed(line.substr(0, bar))] = line.substr(bar + 1);
-    }
-    return jobs;
-}
-
-// scontrol's "JobState=… Reason=…" of a job that left the queue, while Slurm still keeps it.
-std::string finishedJobState(const std::string& id) {
-    const ProgramResult r = runProgram({"scontrol", "-o", "show", "job", id});
-    if (r.status != 0) {
-        // Slurm forgets a finished job after MinJobAge; accounting (where a site keeps it) does not.
-        const ProgramResult a = runProgram({"sacct", "-n", "-P", "-X", "-j", id, "-o", "State,ExitCode"});
-        const std::string line = trimmed(a.out.substr(0, a.out.find('\n')));
-        if (a.status != 0 || line.empty()) return "";
-        const size_t bar = line.find('|');
-        return line.substr(0, bar) + (bar == std::string::npos ? "" : ", exit code " + line.substr(bar + 1));
-    }
-    const auto field = [&](const std::string& key) {
-        const size_t at = r.out.find(" " + key + "=");
-        if (at == std::string::npos) return std::string();
-        const size_t begin = at + key.size() + 2;
-        return r.out.substr(begin, r.out.find(' ', begin) - begin);
-    };
-    return field("JobState") + (field("Reason") == "None" ? "" : " (" + field("Reason") + ")") +
-           (field("ExitCode").empty() ? "" : ", exit code " + field("ExitCode"));
-}
-
-std::string queuedText(const std::string& entry) {
-    std::istringstream parts(entry);
-    std::string state, reason, nodes;
-    std::getline(parts, state, '|');
-    std::getline(parts, reason, '|');
-    std::getline(parts, nodes, '|');
-    std::string text = state == "PENDING" ? "queued" : state == "RUNNING" ? "running" : state;
-    if (state == "RUNNING" && !nodes.empty()) text += " on " + nodes;
-    if (!reason.empty() && reason != "None") text += " (" + reason + ")";
-    return text;
-}
-
-// The files a glTF or GLB points at through its buffers' and images' uris (data: uris aside),
-// resolved against its folder; nothing for a file that does not parse (its bake says why).
-std::vector<fs::path> referencedFiles(const std::string& scenePath) {
-    std::vector<fs::path> files;
-    std::ifstream in(scenePath, std::ios::binary);
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (text.size() >= 20 && text.compare(0, 4, "glTF") == 0) {  // GLB: the JSON chunk first
-        uint32_t length = 0;
-        std::memcpy(&length, text.data() + 12, 4);
-        text = text.substr(20, std::min<size_t>(length, text.size() - 20));
-    }
-    const json gltf = json::parse(text, nullptr, false);
-    if (gltf.is_discarded() || !gltf.is_object()) return files;
-    for (const char* key : {"buffers", "images"})
-        if (gltf.contains(key) && gltf[key].is_array())
-            for (const json& item : gltf[key])
-                if (item.is_object() && item.contains("uri") && item["uri"].is_string()) {
-                    const std::string uri = item["uri"].get<std::string>();
-                    if (uri.rfind("data:", 0) != 0) files.push_back(fs::absolute(scenePath).parent_path() / percentDecoded(uri));
-                }
-    return files;
-}
-
 bool anyQueued(const ClusterPlan& plan) {
     std::string error;
     const std::optional<std::map<std::string, std::string>> queued = queue(&error);
@@ -249,110 +76,6 @@ bool anyQueued(const ClusterPlan& plan) {
             if (!mine.empty() && (id == mine || id.rfind(mine + "_", 0) == 0)) return true;
     return false;
 }
-
-}  // namespace
-
-std::string workFolder(const std::string& outputRoot) {
-    return (fs::absolute(outputRoot) / ".voxlight-slurm").lexically_normal().string();
-}
-
-std::string sceneWorkFolder(const std::string& workDir, size_t scene) {
-    return (fs::path(workDir) / ("scene-" + std::to_string(scene))).string();
-}
-
-void writePlan(const ClusterPlan& plan) {
-    json j;
-    j["version"] = kPlanVersion;
-    j["tool_version"] = VOXLIGHT_VERSION;
-    j["command"] = {{"inputs", plan.command.inputs},
-                    {"output", plan.command.output},
-                    {"settings", plan.command.settings},
-                    {"strict", plan.command.strict}};
-    j["work"] = plan.workDir;
-    j["voxlight"] = plan.voxlight;
-    j["chdir"] = plan.chdir;
-    j["scenes"] = json::array();
-    for (const ClusterPlan::Scene& s : plan.scenes)
-        j["scenes"].push_back({{"scene", s.scenePath}, {"output", s.outputDir}, {"fingerprint", s.fingerprint},
-                               {"units", sceneUnitsJson(s.units)}, {"plan_error", s.planError}});
-    j["slurm"] = {{"voxel_job", plan.voxelJob},       {"voxel_tasks", plan.voxelTasks},
-                  {"receiver_jobs", plan.receiverJobs}, {"receiver_tasks", plan.receiverTasks},
-                  {"merge_job", plan.mergeJob}};
-    fs::create_directories(plan.workDir);
-    const fs::path path = fs::path(plan.workDir) / kPlanFile;
-    const fs::path temp = path.string() + ".tmp";
-    {
-        std::ofstream out(temp);
-        out << j.dump(2) << '\n';
-        if (!out) throw Error("cannot write " + temp.string());
-    }
-    fs::rename(temp, path);
-}
-
-ClusterPlan readPlan(const std::string& workDir) {
-    const fs::path path = fs::path(workDir) / kPlanFile;
-    std::ifstream in(path);
-    if (!in) throw InputError(path.string() + ": no cluster bake was submitted into this folder");
-    try {
-        json j;
-        in >> j;
-        if (j.at("version").get<int>() != kPlanVersion) throw InputError("version");
-        ClusterPlan plan;
-        const json& c = j.at("command");
-        plan.command.inputs = c.at("inputs").get<std::vector<std::string>>();
-        plan.command.output = c.at("output").get<std::string>();
-        plan.command.settings = c.at("settings").get<std::vector<std::pair<std::string, std::string>>>();
-        plan.command.strict = c.at("strict").get<bool>();
-        plan.workDir = j.at("work").get<std::string>();
-        plan.voxlight = j.at("voxlight").get<std::string>();
-        plan.chdir = j.at("chdir").get<std::string>();
-        for (const json& s : j.at("scenes")) {
-            ClusterPlan::Scene scene;
-            scene.scenePath = s.at("scene").get<std::string>();
-            scene.outputDir = s.at("output").get<std::string>();
-            scene.fingerprint = s.at("fingerprint").get<std::string>();
-            scene.planError = s.at("plan_error").get<std::string>();
-            for (const json& atlas : s.at("units").at("atlases"))
-                scene.units.atlases.push_back({atlas.at("name").get<std::string>(), atlas.at("bands").get<int>()});
-            scene.units.cameras = s.at("units").at("cameras").get<int>();
-            plan.scenes.push_back(scene);
-        }
-        const json& slurm = j.at("slurm");
-        plan.voxelJob = slurm.at("voxel_job").get<std::string>();
-        plan.voxelTasks = slurm.at("voxel_tasks").get<std::vector<int>>();
-        plan.receiverJobs = slurm.at("receiver_jobs").get<std::vector<std::string>>();
-        plan.receiverTasks = slurm.at("receiver_tasks").get<std::vector<std::vector<int>>>();
-        plan.mergeJob = slurm.at("merge_job").get<std::string>();
-        return plan;
-    } catch (const InputError&) {
-        throw InputError(path.string() + ": written by another voxlight version; submit the job again");
-    } catch (const std::exception& e) {
-        throw InputError(path.string() + ": not a cluster bake plan (" + e.what() + ")");
-    }
-}
-
-std::string fingerprint(const BakeJob& job, const std::vector<std::string>& jobFiles) {
-    std::ostringstream text;
-    text << VOXLIGHT_VERSION << '\n' << describeBakeSettings(job.settings) << '\n' << job.scenePath << '\n'
-         << job.outputDir << '\n' << job.addedLights.size() << ' ' << job.addedCameras.size() << '\n';
-    const auto stamp = [&](const fs::path& file) {
-        struct stat st {};
-        if (::stat(file.c_str(), &st) == 0)
-            text << file.string() << ' ' << st.st_size << ' ' << st.st_mtim.tv_sec << '.' << st.st_mtim.tv_nsec << '\n';
-    };
-    // The scene file, the files it points at (buffers, textures), the sky image, the job files.
-    stamp(fs::absolute(job.scenePath));
-    for (const fs::path& f : referencedFiles(job.scenePath)) stamp(f);
-    if (!job.settings.skyImage.empty()) stamp(fs::absolute(job.settings.skyImage));
-    for (const std::string& f : jobFiles) stamp(fs::absolute(f));
-    uint64_t hash = 0xcbf29ce484222325ull;
-    for (char c : text.str()) hash = (hash ^ static_cast<unsigned char>(c)) * 0x100000001b3ull;
-    char hex[17];
-    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(hash));
-    return hex;
-}
-
-namespace {
 
 // One submission at a time per work folder: an exclusive lock on <work>/submit.lock, held
 // while it plans, submits and releases, and dropped by the system however the command ends.
@@ -374,18 +97,6 @@ public:
 private:
     int fd_ = -1;
 };
-
-// Slurm's MaxArraySize: array indices must stay below it (1001 unless the site set it).
-int maxArraySize() {
-    const ProgramResult r = runProgram({"scontrol", "show", "config"});
-    std::istringstream lines(r.out);
-    for (std::string line; std::getline(lines, line);)
-        if (line.rfind("MaxArraySize", 0) == 0) {
-            const size_t eq = line.find('=');
-            if (eq != std::string::npos) return std::atoi(trimmed(line.substr(eq + 1)).c_str());
-        }
-    return 1001;
-}
 
 }  // namespace
 
@@ -535,7 +246,7 @@ std::vector<std::string> submit(ClusterPlan& plan, const SlurmOptions& options) 
         release.insert(release.end(), submitted.begin(), submitted.end());
         const ProgramResult released = runProgram(release);
         if (released.status != 0)
-            throw Error("scontrol release failed: " + trimmed(released.err.empty() ? released.out : released.err));
+            throw Error("scontrol release failed: " + released.message());
     } catch (...) {
         if (!submitted.empty()) {
             std::vector<std::string> cancel{"scancel"};
@@ -634,37 +345,6 @@ bool waitForMerge(const ClusterPlan& plan, double pollSeconds) {
         }
         std::this_thread::sleep_for(std::chrono::duration<double>(pollSeconds));
     }
-}
-
-json readSummary(const std::string& workDir) {
-    std::ifstream in(fs::path(workDir) / kSummaryFile);
-    if (!in) return nullptr;
-    json j;
-    try {
-        in >> j;
-    } catch (const std::exception&) {
-        return nullptr;
-    }
-    return j;
-}
-
-void writeSummary(const std::string& workDir, const std::vector<BakeReport>& reports,
-                  const std::vector<double>& mergeSeconds) {
-    json j;
-    j["scenes"] = json::array();
-    for (size_t k = 0; k < reports.size(); ++k) {
-        const BakeReport& r = reports[k];
-        j["scenes"].push_back({{"scene", r.scenePath}, {"output", r.outputDir}, {"ok", r.ok}, {"error", r.error},
-                               {"seconds", r.totalSeconds()}, {"merge_seconds", mergeSeconds.at(k)}});
-    }
-    const fs::path path = fs::path(workDir) / kSummaryFile;
-    const fs::path temp = path.string() + ".tmp";
-    {
-        std::ofstream out(temp);
-        out << j.dump(2) << '\n';
-        if (!out) throw Error("cannot write " + temp.string());
-    }
-    fs::rename(temp, path);
 }
 
 }  // namespace vl::cluster

@@ -5,6 +5,8 @@
 #include "core/error.h"
 #include "voxel/voxelize.h"
 
+#include <type_traits>
+
 namespace vl::cluster {
 namespace {
 
@@ -26,9 +28,23 @@ AtlasGroup atlasFrom(const json& j) {
     return group;
 }
 
-// The arrays in the order they are stored.
-enum Array { kCoords, kAlbedo, kNormal, kAxisWeights, kEmission, kSurfaceOffset, kOpacity, kSolid, kRadiance,
-             kFaceRadiance, kOcclusion, kIrradiance, kFirstLayout };
+// The voxels' channels and the gathered irradiance, in the order the file stores them: the
+// writer and the reader both walk this one list (`v` const or not).
+template <typename Voxels, typename Irradiance, typename Visit>
+void forEachArray(Voxels& v, Irradiance& irradiance, Visit&& visit) {
+    visit(v.coords);
+    visit(v.albedo);
+    visit(v.normal);
+    visit(v.axisWeights);
+    visit(v.emission);
+    visit(v.surfaceOffset);
+    visit(v.opacity);
+    visit(v.solid);
+    visit(v.radiance);
+    visit(v.faceRadiance);
+    visit(v.occlusion);
+    visit(irradiance);
+}
 
 }  // namespace
 
@@ -71,18 +87,7 @@ void writeVoxelState(const VoxelStages& stages, size_t triangles, const std::vec
     h["stage_warnings"] = stageWarnings;
     h["mesh_count"] = r.generatedLayouts.size();
 
-    file.add(v.coords);
-    file.add(v.albedo);
-    file.add(v.normal);
-    file.add(v.axisWeights);
-    file.add(v.emission);
-    file.add(v.surfaceOffset);
-    file.add(v.opacity);
-    file.add(v.solid);
-    file.add(v.radiance);
-    file.add(v.faceRadiance);
-    file.add(v.occlusion);
-    file.add(stages.cache.irradiance());
+    forEachArray(v, stages.cache.irradiance(), [&](const auto& array) { file.add(array); });
     // Per mesh, the layout glTF out writes: its source, and for meshes given generated UVs
     // their split vertices (indices into the primitive), uv1 and triangles.
     for (const GeneratedLayout& layout : r.generatedLayouts) {
@@ -150,18 +155,10 @@ VoxelState readVoxelState(const std::string& path) {
     state.sceneWarnings = h.at("scene_warnings").get<std::vector<std::string>>();
     state.stageWarnings = h.at("stage_warnings").get<std::vector<std::string>>();
 
-    v.coords = file.take<ivec3>(kCoords, path);
-    v.albedo = file.take<vec3>(kAlbedo, path);
-    v.normal = file.take<vec3>(kNormal, path);
-    v.axisWeights = file.take<AxisWeights>(kAxisWeights, path);
-    v.emission = file.take<vec3>(kEmission, path);
-    v.surfaceOffset = file.take<vec3>(kSurfaceOffset, path);
-    v.opacity = file.take<float>(kOpacity, path);
-    v.solid = file.take<uint8_t>(kSolid, path);
-    v.radiance = file.take<vec3>(kRadiance, path);
-    v.faceRadiance = file.take<FaceRadiance>(kFaceRadiance, path);
-    v.occlusion = file.take<float>(kOcclusion, path);
-    state.gatheredIrradiance = file.take<vec3>(kIrradiance, path);
+    size_t next = 0;
+    forEachArray(v, state.gatheredIrradiance, [&](auto& array) {
+        array = file.take<typename std::decay_t<decltype(array)>::value_type>(next++, path);
+    });
     const size_t meshes = h.at("mesh_count").get<size_t>();
     for (size_t m = 0; m < meshes; ++m) {
         const json& l = h.at("layouts").at(m);
@@ -170,9 +167,9 @@ VoxelState readVoxelState(const std::string& path) {
         layout.source.primitive = l.at("primitive").get<int>();
         layout.source.node = l.at("node").get<int>();
         layout.source.mirrored = l.at("mirrored").get<bool>();
-        layout.source.vertices = file.take<uint32_t>(kFirstLayout + 3 * m, path);
-        layout.uv1 = file.take<vec2>(kFirstLayout + 3 * m + 1, path);
-        layout.indices = file.take<uint32_t>(kFirstLayout + 3 * m + 2, path);
+        layout.source.vertices = file.take<uint32_t>(next + 3 * m, path);
+        layout.uv1 = file.take<vec2>(next + 3 * m + 1, path);
+        layout.indices = file.take<uint32_t>(next + 3 * m + 2, path);
         r.generatedLayouts.push_back(std::move(layout));
     }
     const size_t n = v.coords.size();

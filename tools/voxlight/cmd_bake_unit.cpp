@@ -80,13 +80,14 @@ void runUnitCommand(const UnitOptions& options) {
     // Whatever stops a voxel or receiver unit before it runs is recorded in its folder, where
     // --slurm-status and the merge read why; without a plan the folder is not known.
     const cluster::ClusterPlan plan = cluster::readPlan(options.work);
+    if (plan.scenes.empty()) throw InputError(options.work + ": its plan holds no scene");
     const bool isMerge = options.unit == "merge";
     if (!isMerge && (options.scene < 0 || size_t(options.scene) >= plan.scenes.size()))
         throw SettingsError("bake-unit: --scene " + std::to_string(options.scene) + " of a job with " +
                             std::to_string(plan.scenes.size()) + " scenes");
     const size_t k = size_t(std::max(options.scene, 0));
     const std::string work = cluster::sceneWorkFolder(plan.workDir, k);
-    const cluster::SceneUnits& units = plan.scenes[std::min(k, plan.scenes.size() - 1)].units;
+    const cluster::SceneUnits& units = plan.scenes[isMerge ? 0 : k].units;
     const std::string folder = options.unit == "voxel" ? cluster::kVoxelFolder
                                : options.index >= 0 && options.index < units.receiverCount()
                                    ? cluster::receiverFolder(units, options.index)
