@@ -226,11 +226,12 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
     const BvhView bvhView = stages.tracing->bvh.view();
     const bool gathers =
         settings.bounces > 0 || (settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images));
+    const EnclosedProbe enclosed = enclosedSurfaceProbe(bvhView, sceneView);
     RadianceMips bounced;          // the bounces' own mips, relit with their result
     IrradianceCache bouncePoints;  // and their gather points, probed here, linked over them
     result.gatherVisibility = timed(result.stages, "visibility", [&] {
         if (gathers) {
-            bouncePoints = IrradianceCache(result.voxels, settings.bounceGatherLevel);
+            bouncePoints = IrradianceCache(result.voxels, settings.bounceGatherLevel, &enclosed);
             return chooseGatherVisibility(settings.gatherVisibility, bouncePoints, bvhView, sceneView);
         }
         GatherVisibilityChoice none;
@@ -289,7 +290,7 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
             if (reusePoints) {
                 cache = std::move(bouncePoints);
             } else {
-                cache = IrradianceCache(result.voxels, settings.gatherLevel);
+                cache = IrradianceCache(result.voxels, settings.gatherLevel, &enclosed);
                 cache.link(mipView);
             }
             Progress progress("gather", cache.points().size(), settings.quiet);

@@ -1,6 +1,7 @@
 #include "bake/ray_gather.h"
 
 #include "bake/direct_light.h"
+#include "bake/shade_element.h"
 
 #include "cone/cone_trace.h"
 #include "core/error.h"
@@ -385,6 +386,15 @@ std::vector<vec3> skyImageDrawsAtPoints(const std::vector<GatherPoint>& points, 
         return skyImageDrawsIrradiance(scene, bvh, fan.origin, fan.normal, fan.normal, drawsPerAxis, cosineRays,
                                        uint64_t(q));
     });
+}
+
+EnclosedProbe enclosedSurfaceProbe(const BvhView& bvh, const TraceSceneView& scene) {
+    return [bvh, scene](const vec3& position, const vec3& normal) {
+        SurfaceSample side;
+        side.position = position;
+        side.normal = normal;
+        return isBuried(scene, bvh, side);
+    };
 }
 
 BackProbe probeSingleSidedBacks(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,

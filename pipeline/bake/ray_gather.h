@@ -102,6 +102,11 @@ std::vector<vec3> skyIrradianceAtPoints(const std::vector<GatherPoint>& points, 
 std::vector<vec3> skyImageDrawsAtPoints(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
                                         const TraceSceneView& scene, int drawsPerAxis, int raysPerAxis);
 
+// Where the gather points may sit (IrradianceCache's EnclosedProbe): a surface side is
+// enclosed when most of its probe rays meet the backs of surfaces, as a buried lightmap texel
+// is (shade_element.h isBuried).
+EnclosedProbe enclosedSurfaceProbe(const BvhView& bvh, const TraceSceneView& scene);
+
 struct BackProbe {
     uint64_t hits = 0;              // rays that hit a triangle
     uint64_t singleSidedBacks = 0;  // of them, on the back of a single-sided material

@@ -244,8 +244,8 @@ UnitRecord runReceiverUnit(const BakeJob& job, const std::string& sceneWork, con
         const VoxelState state = finishedVoxelState(sceneWork);
         const auto start = std::chrono::steady_clock::now();
         const Scene scene = receiverScene(loadJobScene(job), state);
-        const RebuiltGather gather = rebuildGather(state);
         const ReceiverScene tracing(scene);
+        const RebuiltGather gather = rebuildGather(state, tracing);
         const ReceiverShading shading(tracing, gather.mips, gather.cache, settings, state.onGpu);
         UnitFile file;
         const ReceiverUnit unit = receiverUnit(units, receiver);

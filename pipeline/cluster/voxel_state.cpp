@@ -2,6 +2,7 @@
 
 #include "cluster/unit_file.h"
 #include "bake/gather_visibility.h"
+#include "bake/ray_gather.h"
 #include "core/error.h"
 #include "voxel/voxelize.h"
 
@@ -205,11 +206,12 @@ Scene receiverScene(Scene loaded, const VoxelState& state) {
     return scene;
 }
 
-RebuiltGather rebuildGather(const VoxelState& state) {
+RebuiltGather rebuildGather(const VoxelState& state, const ReceiverScene& tracing) {
     RebuiltGather gather;
     gather.mips = buildRadianceMips(state.result.voxels);
     if (state.gathered) {
-        gather.cache = IrradianceCache(state.result.voxels, state.gatherLevel);
+        const EnclosedProbe enclosed = enclosedSurfaceProbe(tracing.bvh.view(), tracing.traceScene.view());
+        gather.cache = IrradianceCache(state.result.voxels, state.gatherLevel, &enclosed);
         gather.cache.link(gather.mips.view());
         if (state.gatheredIrradiance.size() != gather.cache.points().size())
             throw InputError("the voxel unit's state holds " + std::to_string(state.gatheredIrradiance.size()) +

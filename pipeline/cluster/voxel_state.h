@@ -38,11 +38,12 @@ VoxelState readVoxelState(const std::string& path);
 // to the voxel grid and given the generated lightmap UVs, as bakeVoxelStages left it.
 Scene receiverScene(Scene loaded, const VoxelState& state);
 
-// The final gather's mips and points, rebuilt, with the stored irradiance.
+// The final gather's mips and points, rebuilt, with the stored irradiance; the points placed
+// with `tracing`'s rays as the bake placed them (enclosedSurfaceProbe).
 struct RebuiltGather {
     RadianceMips mips;
     IrradianceCache cache;
 };
-RebuiltGather rebuildGather(const VoxelState& state);
+RebuiltGather rebuildGather(const VoxelState& state, const ReceiverScene& tracing);
 
 }  // namespace vl::cluster

@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -48,7 +49,64 @@ void IrradianceCache::checkLevel(int level) {
         throw SettingsError("gather level " + std::to_string(level) + " is outside 0.." + std::to_string(kMaxCacheLevel));
 }
 
-IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level) : level_(level), voxelSize_(voxels.voxelSize) {
+namespace {
+
+// Where a layer's point sits: the mean centre of its voxels, or, with a probe, of those whose
+// surface is open (IrradianceCache's constructor says why and how).
+vec3 layerPosition(const VoxelScene& voxels, const Side* sides, size_t count, int level, const EnclosedProbe* enclosed) {
+    const auto meanCentre = [&](auto&& take) {
+        glm::dvec3 sum(0.0);
+        size_t taken = 0;
+        for (size_t k = 0; k < count; ++k)
+            if (take(k)) {
+                sum += glm::dvec3(voxels.centre(sides[k].voxel));
+                ++taken;
+            }
+        return std::make_pair(vec3(sum / double(std::max<size_t>(taken, 1))), taken);
+    };
+    const vec3 all = meanCentre([](size_t) { return true; }).first;
+    if (!enclosed || level < 1) return all;
+    const float h = static_cast<float>(voxels.voxelSize);
+    const bool offsets = voxels.surfaceOffset.size() == voxels.size();
+    const auto surfacePoint = [&](size_t k) {
+        const uint32_t i = sides[k].voxel;
+        return voxels.centre(i) + (offsets ? voxels.surfaceOffset[i] * h : vec3(0.0f));
+    };
+    const auto isEnclosed = [&](const vec3& surface, const vec3& normal) {
+        return (*enclosed)(surface + normal * (0.5f * h), normal);
+    };
+    // The quarters of the cell in the layer's plane, each probed at the mean of its surface
+    // points facing the mean of its normals: nothing in it depends on the voxels' order, so a
+    // quarter turn of the scene probes the same places.
+    const int axis = sides[0].faceClass / 2, u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const auto quarter = [&](size_t k) {
+        const ivec3& c = voxels.coords[sides[k].voxel];
+        return ((c[u] >> (level - 1)) & 1) | (((c[v] >> (level - 1)) & 1) << 1);
+    };
+    int open = 0, closed = 0;
+    for (int q = 0; q < 4; ++q) {
+        glm::dvec3 surface(0.0), normal(0.0);
+        size_t inQuarter = 0;
+        for (size_t k = 0; k < count; ++k)
+            if (quarter(k) == q) {
+                surface += glm::dvec3(surfacePoint(k));
+                normal += glm::dvec3(sides[k].normal);
+                ++inQuarter;
+            }
+        if (inQuarter == 0 || !(glm::length(normal) > 0.0)) continue;
+        (isEnclosed(vec3(surface / double(inQuarter)), vec3(glm::normalize(normal))) ? closed : open) += 1;
+    }
+    if (open == 0 || closed == 0) return all;
+    std::vector<uint8_t> isOpen(count);
+    for (size_t k = 0; k < count; ++k) isOpen[k] = !isEnclosed(surfacePoint(k), sides[k].normal);
+    const auto [position, taken] = meanCentre([&](size_t k) { return isOpen[k] != 0; });
+    return taken > 0 ? position : all;
+}
+
+}  // namespace
+
+IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level, const EnclosedProbe* enclosed)
+    : level_(level), voxelSize_(voxels.voxelSize) {
     checkLevel(level);
     const size_t n = voxels.size();
     if (voxels.normal.size() != n || voxels.axisWeights.size() != n)
@@ -87,36 +145,42 @@ IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level) : level_(l
     const vec3 centre = n > 0 ? (vec3(lo) + vec3(hi)) * (0.5f * float(voxels.voxelSize)) : vec3(0.0f);
     const float cellSize = float(std::ldexp(voxels.voxelSize, level));
 
-    nanovdb::GridBuilder<int32_t> builder(-1);
-    auto accessor = builder.getAccessor();
     // One point per layer of a class's sides in a cell: sides whose depths leave a gap of a
     // voxel or more are different surfaces (a wall's two faces 0.15 m apart, 3 voxels, in one
     // cell: the −x point of both, averaged into the wall between them, lifted inside it and
     // seen by no receiver, left a window-lit room's walls without indirect light in every
     // cell's middle). A tilted surface steps one voxel at a time and stays one point.
+    std::vector<size_t> layerBegin;
     for (size_t begin = 0; begin < sides.size();) {
-        size_t end = begin;
-        glm::dvec3 position(0.0), normal(0.0);
-        for (; end < sides.size() && sides[end].sameKey(sides[begin]) &&
-               (end == begin || sides[end].depth - sides[end - 1].depth <= 1);
-             ++end) {
-            position += glm::dvec3(voxels.centre(sides[end].voxel));
-            normal += glm::dvec3(sides[end].normal);
-        }
-        const ivec3 cell = sides[begin].cell;
-        if (begin == 0 || cell != sides[begin - 1].cell) {
-            accessor.setValue(nanovdb::Coord(cell.x, cell.y, cell.z), static_cast<int32_t>(cellBegin_.size()));
-            cellBegin_.push_back(static_cast<uint32_t>(points_.size()));
-            cellCoords_.push_back(cell);
-        }
-        GatherPoint point;
-        point.position = vec3(position / double(end - begin));
+        size_t end = begin + 1;
+        while (end < sides.size() && sides[end].sameKey(sides[begin]) && sides[end].depth - sides[end - 1].depth <= 1)
+            ++end;
+        layerBegin.push_back(begin);
+        begin = end;
+    }
+    layerBegin.push_back(sides.size());
+    points_.resize(layerBegin.size() - 1);
+    tbb::parallel_for(size_t(0), points_.size(), [&](size_t p) {
+        const size_t begin = layerBegin[p], count = layerBegin[p + 1] - begin;
+        glm::dvec3 normal(0.0);
+        for (size_t k = begin; k < begin + count; ++k) normal += glm::dvec3(sides[k].normal);
+        GatherPoint& point = points_[p];
+        point.position = layerPosition(voxels, &sides[begin], count, level, enclosed);
         const double length = glm::length(normal);
         // Side normals of one class all lean the same way, so the sum is far from zero.
         point.normal = length > 0.0 ? vec3(normal / length) : sides[begin].normal;
         gatherFrame(point.position, point.normal, centre, cellSize, point.tangent, point.turn);
-        points_.push_back(point);
-        begin = end;
+    });
+    nanovdb::GridBuilder<int32_t> builder(-1);
+    auto accessor = builder.getAccessor();
+    for (size_t p = 0; p < points_.size(); ++p) {
+        const size_t begin = layerBegin[p];
+        const ivec3 cell = sides[begin].cell;
+        if (begin == 0 || cell != sides[begin - 1].cell) {
+            accessor.setValue(nanovdb::Coord(cell.x, cell.y, cell.z), static_cast<int32_t>(cellBegin_.size()));
+            cellBegin_.push_back(static_cast<uint32_t>(p));
+            cellCoords_.push_back(cell);
+        }
     }
     cellBegin_.push_back(static_cast<uint32_t>(points_.size()));
     cells_ = builder.getHandle<>(1.0, nanovdb::Vec3d(0.0), "gather_cells");

@@ -14,7 +14,8 @@
 // lies in (cell C holds voxels 2^L·C … 2^L·C + 2^L − 1, as mip level L in radiance_mips.h)
 // and by the signed axis their normal is closest to: a cell holding a floor and a wall has a
 // point for each, a thin wall one for each of its sides. A point sits at the mean centre of
-// its voxels, facing the normalised mean of their side normals.
+// its voxels, facing the normalised mean of their side normals; given a probe that tells
+// enclosed surface (EnclosedProbe), at the mean of the voxels whose surface is open.
 //
 // Interpolation at a surface point p with unit normal n: every gather point q (normal n_q)
 // of the 3 × 3 × 3 cells around p's cell that p can see (clearPath, tested once per
@@ -37,6 +38,7 @@
 #include <nanovdb/util/HostBuffer.h>
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace vl {
@@ -273,12 +275,25 @@ VL_HOSTDEV inline bool interpolateIrradiance(const IrradianceCacheView& cache, c
     return true;
 }
 
+// Whether the surface side at `position` (a voxel's surface point, lifted half a voxel off it)
+// facing `normal` lies inside closed geometry, where no light reaches: a floor under a block
+// standing on it. The voxels cannot tell (a block's walls are one voxel thick and its inside
+// empty); the bake answers with rays (bake/enclosed_probe.h).
+using EnclosedProbe = std::function<bool(const vec3& position, const vec3& normal)>;
+
 class IrradianceCache {
 public:
     IrradianceCache() = default;
     // The gather points of `voxels`' surface sides at cell level `level` (0 … 16; SettingsError
     // outside). Error when normals or axis weights do not match the voxel count.
-    IrradianceCache(const VoxelScene& voxels, int level);
+    //
+    // With `enclosed`, a point lies on the open part of its layer. A cell a block's foot
+    // crosses holds floor on both sides of its wall, and the mean of all of it fell under the
+    // block, or beside its wall: the receivers around took that point's darkness (the Cycles
+    // quad box's floor, the half of the lightmap's squared error at 79 voxels, its indirect
+    // light 5.7% low in the mean). Each quarter of a layer is probed at the mean of its
+    // surface points; where the quarters disagree, every voxel of the layer is.
+    IrradianceCache(const VoxelScene& voxels, int level, const EnclosedProbe* enclosed = nullptr);
     // SettingsError for a level outside 0 … 16.
     static void checkLevel(int level);
 

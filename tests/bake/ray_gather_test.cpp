@@ -127,6 +127,51 @@ TEST_CASE("Rays read nothing behind the surface they hit", "[bake]") {
     CHECK(facingPoints > 0);
 }
 
+TEST_CASE("A gather point sits on the open floor of a cell a block's foot crosses", "[bake]") {
+    // A floor, and a closed block (five outward faces) standing on it whose wall runs through
+    // the middle of a cell of 8³ voxels, at x = 4 voxels: the cell's floor is open at voxels
+    // x = 0 … 3 and under the block at 5 … 7, where no light reaches. The mean of the whole
+    // layer lies at x = 3.5 voxels, on the wall's line, and the receivers on the open floor
+    // took that point's darkness. Probed, the point lies at the mean of the open voxels, and
+    // the points of open cells do not move.
+    Scene scene;
+    scene.sourcePath = "block on a floor (test)";
+    const int white = addLambert(scene, vec3(0.5f));
+    const float h = 1.0f / 64.0f;
+    addQuad(scene, "floor", white, vec3(-0.5f, 0.0f, -0.5f), vec3(-0.5f, 0.0f, 0.5f), vec3(0.5f, 0.0f, 0.5f),
+            vec3(0.5f, 0.0f, -0.5f));
+    Scene block;
+    addRoom(block, "block/", white, vec3(4.0f * h, 0.0f, -0.3f), vec3(0.3f, 0.2f, 0.3f));
+    for (Mesh& face : block.meshes) {
+        if (face.name == "block/floor") continue;  // the block stands on the floor, open below
+        for (size_t t = 0; t < face.indices.size(); t += 3) std::swap(face.indices[t + 1], face.indices[t + 2]);
+        for (vec3& n : face.normals) n = -n;
+        scene.meshes.push_back(face);
+    }
+    REQUIRE(glm::dot(scene.meshes[0].normals[0], vec3(0.0f, 1.0f, 0.0f)) > 0.99f);
+    const VoxelScene v = voxels(scene, h);
+    const Traced t = traced(scene);
+    const EnclosedProbe enclosed = enclosedSurfaceProbe(t.bvh.view(), t.scene.view());
+    const IrradianceCache plain(v, 3), probed(v, 3, &enclosed);
+    REQUIRE(plain.points().size() == probed.points().size());
+    // The floor's point of the cell holding voxels x, z = 0 … 7 (cell 0), and of the open cell
+    // before it along x (cell −1).
+    const auto floorPoint = [&](const IrradianceCache& cache, int cellX) {
+        for (const GatherPoint& p : cache.points())
+            if (p.normal.y > 0.9f && std::abs(p.position.y) < 0.5f * h && p.position.x > (8.0f * cellX - 0.5f) * h &&
+                p.position.x < (8.0f * cellX + 7.5f) * h && p.position.z > -0.5f * h && p.position.z < 7.5f * h)
+                return p.position;
+        FAIL("no floor point in cell " << cellX);
+        return vec3(0.0f);
+    };
+    const vec3 across = floorPoint(plain, 0), open = floorPoint(probed, 0);
+    INFO("the whole layer's mean at x = " << across.x / h << " voxels, the open part's at " << open.x / h);
+    CHECK(std::abs(across.x - 3.5f * h) < 0.01f * h);
+    CHECK(open.x < 2.1f * h);
+    CHECK(open.x > 1.4f * h);
+    CHECK(floorPoint(probed, -1) == floorPoint(plain, -1));
+}
+
 TEST_CASE("The bake gathers by cones where rays see the backs of single-sided surfaces", "[bake]") {
     // A floor under a shelf that faces up as the floor does: the floor's rays hit the shelf's
     // underside, the back of a single-sided surface, which the voxels do not show (they hold a

@@ -4,7 +4,9 @@
 // lightmap's UV layout does not turn with the scene, so Cycles' unturned bake is the truth
 // for every turn. An accuracy measurement, not a test and not a speed figure.
 //
-//   build/accuracy/accuracy_rotations [--turns N] [name=value …]   (bake settings)
+//   build/accuracy/accuracy_rotations [--turns N] [--only K] [--write DIR] [name=value …]
+//   (bake settings; --only: turn K alone, 0 unturned; --write: each lightmap's total,
+//   direct and indirect as DIR/<box>_turnK{,_direct,_indirect}.exr, to map where the error is)
 //
 // To compare voxel counts, give `voxel-size` (the box's side over the count: 0.559 m / N), not
 // `resolution`: a resolution counts voxels along the turned box's axis-aligned bounds, up to
@@ -52,7 +54,8 @@ struct Errors {
 
 int main(int argc, char** argv) {
     try {
-        int turns = 16;
+        int turns = 16, only = -1;
+        std::string writeDir;
         BakeSettings settings;
         settings.quiet = true;
         settings.outputs.grids = settings.outputs.images = false;
@@ -60,6 +63,14 @@ int main(int argc, char** argv) {
             const std::string arg = argv[i];
             if (arg == "--turns" && i + 1 < argc) {
                 turns = std::stoi(argv[++i]);
+                continue;
+            }
+            if (arg == "--only" && i + 1 < argc) {
+                only = std::stoi(argv[++i]);
+                continue;
+            }
+            if (arg == "--write" && i + 1 < argc) {
+                writeDir = argv[++i];
                 continue;
             }
             applySetting(bakeSettingsTable(), settings, arg);
@@ -92,6 +103,7 @@ int main(int argc, char** argv) {
             const Scene original = loadGltf(reference + "cornell_" + name + ".gltf", load);
             std::vector<Errors> errors;
             for (size_t k = 0; k < rotations.size(); ++k) {
+                if (only >= 0 && k != size_t(only)) continue;
                 Scene scene = original;
                 turn(scene, rotations[k]);
                 Diagnostics diagnostics(false, false);
@@ -99,6 +111,12 @@ int main(int argc, char** argv) {
                 const BakedLightmap& lightmap = result.lightmaps.at(0);
                 const ErrorMetrics t = compareImages(lightmap.total, total, options);
                 const ErrorMetrics i = compareImages(lightmap.indirect, indirect, options);
+                if (!writeDir.empty()) {
+                    const std::string stem = writeDir + "/" + name + "_turn" + std::to_string(k);
+                    writeExr(lightmap.total, stem + ".exr");
+                    writeExr(lightmap.direct, stem + "_direct.exr");
+                    writeExr(lightmap.indirect, stem + "_indirect.exr");
+                }
                 errors.push_back({t.relativeRmse, i.relativeRmse, i.meanTest[0] / i.meanReference[0] - 1.0});
                 const glm::quat& q = rotations[k];
                 std::printf("%-5s %s (%+.3f %+.3f %+.3f %+.3f): lightmap %.2f%%, indirect %.2f%% (mean %+.1f%%)\n",
