@@ -273,7 +273,10 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
     });
     const bool reusePoints = bounced.levelCount() > 0 && settings.bounceGatherLevel == settings.gatherLevel;
     result.mips = timed(result.stages, "mips", [&] {
-        return bounced.levelCount() > 0 ? std::move(bounced) : buildRadianceMips(result.voxels);
+        if (bounced.levelCount() > 0) return std::move(bounced);
+        const VoxelScene& voxels = result.voxels;
+        return byRays && !voxels.faceRadiance.empty() ? buildLevelZeroMips(voxels, voxels.radiance, voxels.faceRadiance)
+                                                      : buildRadianceMips(voxels);
     });
     const MipView mipView = result.mips.view();
 
@@ -293,6 +296,7 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
                 cache = IrradianceCache(result.voxels, settings.gatherLevel, &enclosed);
                 cache.link(mipView);
             }
+            if (byRays) cache.setRaysPerAxis(settings.gatherRays);
             Progress progress("gather", cache.points().size(), settings.quiet);
             const std::vector<FaceRadiance>& light = split.patches.empty() ? result.voxels.faceRadiance : split.restFaces;
             // The bounces' rays, when they are the final gather's (the same points and as

@@ -214,7 +214,6 @@ void writeBakeFiles(const BakeJob& job, BakeResult& result, const ExportSource& 
     report.voxels = result.voxels.size();
     report.voxelSize = result.voxels.voxelSize;
     report.voxelSizeChoice = result.voxelSizeChoice;
-    report.mipLevels = static_cast<size_t>(result.mips.levelCount());
     report.gatherPoints = result.gatherPoints;
     report.brightPatches = result.brightPatches;
     report.gatherVisibility = result.gatherVisibility;
@@ -245,8 +244,10 @@ void writeBakeFiles(const BakeJob& job, BakeResult& result, const ExportSource& 
     if (settings.outputs.grids) {
         result.voxels.sourceScene = job.scenePath;
         result.voxels.settings = describeBakeSettings(settings);
+        result.mips.addParentLevels();  // a bake that gathered by rays built level 0 alone
         files.add("grids.vdb", [&](const std::string& p) { writeVoxelFile(result.voxels, p, mipGridsForFile(result.mips)); });
     }
+    report.mipLevels = static_cast<size_t>(result.mips.levelCount());
     if (settings.outputs.gltf && isGltfFile(source.sourcePath))
         files.add("scene.glb", [&](const std::string& p) {
             std::vector<ExportedLightmap> lightmaps;

@@ -1,6 +1,7 @@
 #include "bake/ray_gather.h"
 
 #include "bake/direct_light.h"
+#include "bake/hit_texels.h"
 #include "bake/shade_element.h"
 
 #include "cone/cone_trace.h"
@@ -117,11 +118,12 @@ void traceFan(const RayFan& fan, const std::vector<vec3>& pattern, const BvhView
 // 22 kB).
 struct HitLookup {
     using Leaf = IndexLeafCache::Leaf;
+    using Coverage = uint8_t;
     static constexpr uint8_t kWhole = 255;
     static constexpr size_t kMaxLeafSlots = size_t(1) << 21;  // 16 MB of pointers
     const MipIndexGrid* index = nullptr;
     float inverseVoxelSize = 0.0f;
-    std::vector<std::array<uint8_t, 6>> coverage;  // per voxel, by direction of travel
+    std::vector<std::array<uint8_t, 6>> coverages;  // per voxel, by direction of travel
     ivec3 leafMin = ivec3(0), leafSlots = ivec3(0);  // the table's box, in leaves
     std::vector<const Leaf*> leaves;                 // empty: the tree is walked
 
@@ -137,6 +139,7 @@ struct HitLookup {
                                   size_t(slot.x)];
         return leaf ? leaf->getValue(Leaf::CoordToOffset(ijk)) : -1;
     }
+    uint8_t coverage(int32_t voxel, int travel) const { return coverages[size_t(voxel)][size_t(travel)]; }
 };
 
 void tableLeaves(HitLookup& lookup) {
@@ -168,67 +171,15 @@ HitLookup hitLookup(const MipLevelView& level0, size_t voxels) {
     lookup.index = level0.index;
     lookup.inverseVoxelSize = level0.inverseVoxelSize;
     tableLeaves(lookup);
-    lookup.coverage.resize(voxels);
+    lookup.coverages.resize(voxels);
     tbb::parallel_for(size_t(0), voxels, [&](size_t i) {
         for (size_t t = 0; t < 6; ++t) {
             const float c = glm::clamp(level0.texels[i * size_t(level0.facesPerVoxel) + t].coverage, 0.0f, 1.0f);
             // A sliver of surface still shows: it rounds up to 1, never to nothing.
-            lookup.coverage[i][t] = c > 0.0f ? static_cast<uint8_t>(std::max(1l, std::lround(c * float(HitLookup::kWhole)))) : 0;
+            lookup.coverages[i][t] = c > 0.0f ? static_cast<uint8_t>(std::max(1l, std::lround(c * float(HitLookup::kWhole)))) : 0;
         }
     });
     return lookup;
-}
-
-// What the voxels show a ray where it hits a surface of geometric normal n: along each axis a
-// (weight n_a², normalised over the axes read), the level-0 texel that shows the face of the
-// hit surface's side that looks back at the ray (radiance_mips.h: the texel of travel −s shows
-// face s), in the voxel holding the hit or its neighbour along a, whichever shows more
-// surface; its colour is radiance / coverage. Calls read(voxel, travel, weight) per texel
-// read; n need not be unit. The face follows the surface's side, not the ray's sign along
-// each axis: a ray glancing down onto a tilted double-sided floor travels +X where the
-// floor's lit side faces +X, and the texel of its travel would show the floor's unlit
-// underside (a closed double-sided box turned 30–60° kept 59–77% of its bounce series that
-// way, 100–101% single-sided). Only the voxels the surface itself passes through are read, so
-// nothing behind the surface (a thin wall's other room) is.
-template <typename Read>
-void readHitTexels(const HitLookup& level0, IndexLeafCache& leaves, const Ray& ray, const Hit& hit, const vec3& n,
-                   Read&& read) {
-    const ivec3 centre(glm::floor(ray.at(hit.t) * level0.inverseVoxelSize + vec3(0.5f)));
-    const float length2 = glm::dot(n, n);
-    const vec3 seen = glm::dot(n, ray.direction) < 0.0f ? n : -n;  // the side facing the ray
-    int32_t voxel[3];
-    float weight[3];
-    int travel[3];
-    float weights = 0.0f;
-    for (int a = 0; a < 3; ++a) {
-        voxel[a] = -1;
-        const float w = n[a] * n[a];
-        if (!(w > 0.01f * length2)) continue;
-        travel[a] = 2 * a + (seen[a] > 0.0f ? 1 : 0);
-        uint8_t best = 0;
-        // The hit's own voxel first: where it shows the face whole (coverage 1, no voxel shows
-        // more) its neighbours are not looked up, which most hits on a wall are spared (the
-        // reads were 60% of the trace: the quad box's 16 × 16 transport took 0.08 s, 0.03 s
-        // with them skipped; 0.06 s reading the own voxel first, the same lightmaps).
-        for (int k : {0, -1, 1}) {
-            ivec3 c = centre;
-            c[a] += k;
-            const int32_t index = level0.voxelAt(leaves, c);
-            if (index < 0) continue;
-            const uint8_t coverage = level0.coverage[size_t(index)][size_t(travel[a])];
-            if (coverage > best) {
-                best = coverage;
-                voxel[a] = index;
-                if (coverage == HitLookup::kWhole) break;
-            }
-        }
-        if (voxel[a] >= 0) {
-            weight[a] = w;
-            weights += w;
-        }
-    }
-    for (int a = 0; a < 3; ++a)
-        if (voxel[a] >= 0) read(voxel[a], travel[a], weight[a] / weights);
 }
 
 }  // namespace
@@ -249,7 +200,7 @@ std::vector<vec3> gatherByRays(const std::vector<GatherPoint>& points, const Mip
             const RayFan fan = rayFan(points[q], h, bvh, scene);
             vec3 sum(0.0f);
             traceFan(fan, pattern, bvh, [&](const Ray& ray, const Hit& hit) {
-                readHitTexels(level0, leaves, ray, hit, windingCross(scene, hit.triangle),
+                readHitTexels(level0, leaves, ray.at(hit.t), ray.direction, windingCross(scene, hit.triangle),
                               [&](int32_t voxel, int travel, float weight) {
                                   sum += weight * faces[size_t(voxel)][size_t(travel ^ 1)];
                               });
@@ -311,7 +262,7 @@ FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView
             };
             traceFan(fan, pattern, bvh, escaped, [&](const Ray& ray, const Hit& hit) {
                 ++hits;
-                readHitTexels(level0, leaves, ray, hit, windingCross(scene, hit.triangle),
+                readHitTexels(level0, leaves, ray.at(hit.t), ray.direction, windingCross(scene, hit.triangle),
                               [&](int32_t voxel, int travel, float weight) {
                                   // The texel of travel t shows face t ^ 1 (radiance_mips.h).
                                   const uint32_t slot = uint32_t(voxel) * 6u + uint32_t(travel ^ 1);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "bake/direct_light.h"
+#include "bake/hit_texels.h"
 #include "cone/cone_set.h"
 #include "cone/cone_trace.h"
 #include "cone/irradiance_cache.h"
@@ -24,7 +25,10 @@ namespace vl {
 // surfaces. A sample is buried when more than half of kBuriedProbeRays cosine-distributed
 // rays first hit a surface from behind its shading normal; it then gets no indirect light
 // (its direct term, from shadow rays, is already zero). The majority rule keeps an open
-// receiver open where a few surfaces face away from it (an exporter's flipped wall).
+// receiver open where a few surfaces face away from it (an exporter's flipped wall). A
+// sample that a light reaches is open to it and is not probed: its eight or more probe rays
+// were a third of the Cycles quad box's lightmap shading (perf), where most texels see the
+// light.
 constexpr int kBuriedProbesPerAxis = 4;
 constexpr int kBuriedProbeRays = kBuriedProbesPerAxis * kBuriedProbesPerAxis;
 
@@ -118,9 +122,40 @@ struct ElementLighting {
     vec3 indirectRadiance{0.0f};
 };
 
+// The irradiance at a surface point from n × n cosine-distributed rays (the gather points'
+// fan, bake/ray_gather.h, laid out in the frame `tangent` turned by `turn`), each reading the
+// level-0 texels of `mips` where it hits (hit_texels.h): how a receiver sample that no gather
+// point applies to gathers when the points gathered by rays. Level 0 is all it reads, so the
+// mips need no coarser levels then.
+VL_HOSTDEV inline vec3 rayGatherAtSample(const TraceSceneView& scene, const BvhView& bvh, const MipView& mips,
+                                         const vec3& position, const vec3& normal, const vec3& tangent, float turn,
+                                         int raysPerAxis) {
+    if (mips.levelCount <= 0 || raysPerAxis <= 0) return vec3(0.0f);
+    const Level0Texels level0(mips.levels[0]);
+    const float angle = 2.0f * kPi * turn;
+    const vec3 across = glm::cross(normal, tangent);
+    const vec3 t = glm::cos(angle) * tangent + glm::sin(angle) * across, b = glm::cross(normal, t);
+    Ray ray;
+    ray.origin = offsetRayOrigin(position, normal, bvh.extent);
+    IndexLeafCache leaves;
+    vec3 sum(0.0f);
+    for (int i = 0; i < raysPerAxis; ++i)
+        for (int j = 0; j < raysPerAxis; ++j) {
+            const vec3 d = sampleCosineHemisphere(
+                vec2((float(i) + 0.5f) / float(raysPerAxis), (float(j) + 0.5f) / float(raysPerAxis)));
+            ray.direction = glm::normalize(d.x * t + d.y * b + d.z * normal);
+            Hit hit;
+            if (!intersectClosest(bvh, ray, hit)) continue;
+            readHitTexels(level0, leaves, ray.at(hit.t), ray.direction, windingCross(scene, hit.triangle),
+                          [&](int32_t voxel, int travel, float weight) { sum += weight * level0.colour(voxel, travel); });
+        }
+    return sum * (kPi / float(raysPerAxis * raysPerAxis));
+}
+
 // Indirect irradiance at a receiver sample: interpolated from the gather points of `cache`
 // (irradiance_cache.h), or, without a cache or where no gather point applies, gathered by
-// cones, laid out in the frame that turns with the scene (gatherFrame) and turned by
+// cones (by rays where the points were: rayGatherAtSample), laid out in the frame that turns
+// with the scene (gatherFrame) and turned by
 // coneTurn(seed) (a texel's or pixel's index, which the scene's placement does not change).
 // Where no gather point applies the sample first moves out of another surface's voxel layer
 // (lookupCandidates) and tries the gather points from there; only such samples move.
@@ -138,6 +173,8 @@ VL_HOSTDEV inline vec3 indirectIrradiance(const TraceSceneView& scene, const Bvh
     vec3 tangent;
     float positionTurn;
     gatherFrame(position, sample.normal, mips.centre(), mips.voxelSize, tangent, positionTurn);
+    if (cache && cache->raysPerAxis > 0)
+        return rayGatherAtSample(scene, bvh, mips, position, sample.normal, tangent, coneTurn(seed), cache->raysPerAxis);
     return coneTraceIrradiance(mips, position, sample.normal, set, cone, nullptr, coneTurn(seed), &tangent);
 }
 
@@ -155,7 +192,7 @@ VL_HOSTDEV inline ElementLighting shadeReceiverElement(const TraceSceneView& sce
     for (uint32_t i = first; i < last; ++i) {
         const SurfaceSample& r = samples[i];
         const vec3 ed = directIrradiance(scene, bvh, r, direct, i) * kInvPi;
-        const vec3 ei = mips && !(mayBeBuried && isBuried(scene, bvh, r))
+        const vec3 ei = mips && !(mayBeBuried && !(maxComponent(ed) > 0.0f) && isBuried(scene, bvh, r))
                             ? indirectIrradiance(scene, bvh, *mips, cache, set, cone, r, i) * kInvPi
                             : vec3(0.0f);
         out.direct += r.weight * ed;

@@ -245,7 +245,7 @@ UnitRecord runReceiverUnit(const BakeJob& job, const std::string& sceneWork, con
         const auto start = std::chrono::steady_clock::now();
         const Scene scene = receiverScene(loadJobScene(job), state);
         const ReceiverScene tracing(scene);
-        const RebuiltGather gather = rebuildGather(state, tracing);
+        const RebuiltGather gather = rebuildGather(state, tracing, settings.gatherRays);
         const ReceiverShading shading(tracing, gather.mips, gather.cache, settings, state.onGpu);
         UnitFile file;
         const ReceiverUnit unit = receiverUnit(units, receiver);
@@ -315,7 +315,12 @@ BakeReport mergeScene(const BakeJob& job, const std::string& sceneWork, const Sc
         const Scene scene = receiverScene(std::move(loaded), state);
         BakeResult result = std::move(state.result);
         report.stages.insert(report.stages.end(), result.stages.begin(), result.stages.end());
-        result.mips = buildRadianceMips(result.voxels);
+        // As the bake left them: level 0 alone where it gathered by rays (writeBakeFiles adds
+        // the coarser levels for grids.vdb).
+        const VoxelScene& voxels = result.voxels;
+        result.mips = result.gatherVisibility.visibility == GatherVisibility::Rays && !voxels.faceRadiance.empty()
+                          ? buildLevelZeroMips(voxels, voxels.radiance, voxels.faceRadiance)
+                          : buildRadianceMips(voxels);
 
         double lightmapSeconds = 0.0, imageSeconds = 0.0;
         if (job.settings.outputs.lightmaps) {

@@ -206,9 +206,12 @@ Scene receiverScene(Scene loaded, const VoxelState& state) {
     return scene;
 }
 
-RebuiltGather rebuildGather(const VoxelState& state, const ReceiverScene& tracing) {
+RebuiltGather rebuildGather(const VoxelState& state, const ReceiverScene& tracing, int gatherRaysPerAxis) {
     RebuiltGather gather;
-    gather.mips = buildRadianceMips(state.result.voxels);
+    const VoxelScene& voxels = state.result.voxels;
+    const bool byRays = state.result.gatherVisibility.visibility == GatherVisibility::Rays;
+    gather.mips = byRays && !voxels.faceRadiance.empty() ? buildLevelZeroMips(voxels, voxels.radiance, voxels.faceRadiance)
+                                                         : buildRadianceMips(voxels);
     if (state.gathered) {
         const EnclosedProbe enclosed = enclosedSurfaceProbe(tracing.bvh.view(), tracing.traceScene.view());
         gather.cache = IrradianceCache(state.result.voxels, state.gatherLevel, &enclosed);
@@ -217,6 +220,7 @@ RebuiltGather rebuildGather(const VoxelState& state, const ReceiverScene& tracin
             throw InputError("the voxel unit's state holds " + std::to_string(state.gatheredIrradiance.size()) +
                              " gathered points, its voxels give " + std::to_string(gather.cache.points().size()));
         gather.cache.setIrradiance(state.gatheredIrradiance);
+        if (byRays) gather.cache.setRaysPerAxis(gatherRaysPerAxis);
     }
     return gather;
 }

@@ -39,11 +39,13 @@ VoxelState readVoxelState(const std::string& path);
 Scene receiverScene(Scene loaded, const VoxelState& state);
 
 // The final gather's mips and points, rebuilt, with the stored irradiance; the points placed
-// with `tracing`'s rays as the bake placed them (enclosedSurfaceProbe).
+// with `tracing`'s rays as the bake placed them (enclosedSurfaceProbe), and, where they
+// gathered by rays, level 0 of the mips alone and the receivers no point applies to
+// gathering by `gatherRaysPerAxis`² rays, as in the bake.
 struct RebuiltGather {
     RadianceMips mips;
     IrradianceCache cache;
 };
-RebuiltGather rebuildGather(const VoxelState& state, const ReceiverScene& tracing);
+RebuiltGather rebuildGather(const VoxelState& state, const ReceiverScene& tracing, int gatherRaysPerAxis);
 
 }  // namespace vl::cluster

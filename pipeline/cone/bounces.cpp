@@ -195,7 +195,9 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
     std::vector<FaceRadiance> lit = litFaces(voxels);
     std::vector<FaceRadiance> current = lit;
     std::vector<FaceRadiance> next(voxels.size());
-    RadianceMips mips = buildRadianceMips(voxels, isotropic(voxels, current), current);
+    // Rays read level 0 alone; cones want the coarser levels too.
+    RadianceMips mips = transportBuilder ? buildLevelZeroMips(voxels, isotropic(voxels, current), current)
+                                         : buildRadianceMips(voxels, isotropic(voxels, current), current);
     cache.link(mips.view());
     const SideWeights weights = sideWeights(voxels, cache.view(mips.view()));
     std::vector<vec3> selfIrradiance(weights.selfGathered.size());

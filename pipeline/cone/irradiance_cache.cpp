@@ -254,6 +254,7 @@ IrradianceCacheView IrradianceCache::view(const MipView& mips) const {
     view.pointCount = static_cast<uint32_t>(points_.size());
     view.voxelSize = static_cast<float>(voxelSize_);
     view.level = level_;
+    view.raysPerAxis = raysPerAxis_;
     return view;
 }
 

@@ -102,6 +102,9 @@ struct IrradianceCacheView {
     uint32_t pointCount = 0;
     float voxelSize = 0.0f;  // h
     int level = 0;           // L
+    // > 0: the points gathered by n × n rays (bake/ray_gather.h), and a receiver no point
+    // applies to gathers so too; 0: by cones.
+    int raysPerAxis = 0;
     // Per level-0 voxel, the plane of its surface (unit normal, n·x at its surface's centroid;
     // a zero normal where the voxel's normals cancel): what a path must cross to be blocked
     // by it (clearPath). Null: every solid voxel blocks.
@@ -307,6 +310,9 @@ public:
     void gather(const MipView& mips, const ConeSettings& settings, int turns = 1, Progress* progress = nullptr);
     // Irradiance computed elsewhere (a GPU launcher), one per point.
     void setIrradiance(std::vector<vec3> irradiance);
+    // How the points were gathered: by n × n rays (n > 0) or by cones (0), for the receivers
+    // no point applies to (IrradianceCacheView::raysPerAxis).
+    void setRaysPerAxis(int raysPerAxis) { raysPerAxis_ = raysPerAxis; }
     // Finds each point's neighbours: the points of the 3 × 3 × 3 cells around its own that
     // face its way (n·n_q > 0) and that it sees (clearPath between both lifted off their
     // surfaces, through level 0 of `mips`), itself included. Receivers interpolate from
@@ -328,6 +334,7 @@ private:
     std::vector<ivec3> cellCoords_;  // per cell slot
     std::vector<uint32_t> neighbourBegin_, neighbours_;
     std::vector<vec4> surfacePlanes_;  // per voxel (IrradianceCacheView::surfacePlanes)
+    int raysPerAxis_ = 0;
     nanovdb::GridHandle<nanovdb::HostBuffer> cells_;
 };
 

@@ -323,23 +323,48 @@ size_t RadianceMips::memoryBytes() const {
 }
 
 // The one builder behind the overloads (a friend of RadianceMips); faces null: isotropic.
-RadianceMips buildMips(const VoxelScene& voxels, const std::vector<vec3>& radiance, const std::vector<FaceRadiance>* faces);
+// Level 0 only when `parents` is false.
+RadianceMips buildMips(const VoxelScene& voxels, const std::vector<vec3>& radiance, const std::vector<FaceRadiance>* faces,
+                       bool parents);
 
 RadianceMips buildRadianceMips(const VoxelScene& voxels) {
-    if (voxels.faceRadiance.empty()) return buildMips(voxels, voxels.radiance, nullptr);
-    return buildMips(voxels, voxels.radiance, &voxels.faceRadiance);
+    if (voxels.faceRadiance.empty()) return buildMips(voxels, voxels.radiance, nullptr, true);
+    return buildMips(voxels, voxels.radiance, &voxels.faceRadiance, true);
 }
 
 RadianceMips buildRadianceMips(const VoxelScene& voxels, const std::vector<vec3>& radiance) {
-    return buildMips(voxels, radiance, nullptr);
+    return buildMips(voxels, radiance, nullptr, true);
 }
 
 RadianceMips buildRadianceMips(const VoxelScene& voxels, const std::vector<vec3>& radiance,
                                const std::vector<FaceRadiance>& faceRadiance) {
-    return buildMips(voxels, radiance, &faceRadiance);
+    return buildMips(voxels, radiance, &faceRadiance, true);
 }
 
-RadianceMips buildMips(const VoxelScene& voxels, const std::vector<vec3>& radiance, const std::vector<FaceRadiance>* faces) {
+RadianceMips buildLevelZeroMips(const VoxelScene& voxels, const std::vector<vec3>& radiance,
+                                const std::vector<FaceRadiance>& faceRadiance) {
+    return buildMips(voxels, radiance, &faceRadiance, false);
+}
+
+void RadianceMips::addParentLevels() {
+    if (levels_.empty()) return;
+    while (!isSmallEnough(levels_.back()) && levelCount() < MipView::kMaxLevels) {
+        const int k = levelCount();
+        levels_.push_back(parentLevel(levels_.back(), voxelSize_, k));
+    }
+    addIndexGrids();
+}
+
+void RadianceMips::addIndexGrids() {
+    // Each level's index grid is built on its own; level 0 holds about three quarters of all
+    // voxels, so this hides the rest behind it.
+    const int first = static_cast<int>(grids_.size());
+    grids_.resize(size_t(levelCount()));
+    tbb::parallel_for(first, levelCount(), [&](int k) { grids_[size_t(k)] = toIndexGrid(levels_[size_t(k)], k); });
+}
+
+RadianceMips buildMips(const VoxelScene& voxels, const std::vector<vec3>& radiance, const std::vector<FaceRadiance>* faces,
+                       bool parents) {
     checkInputs(voxels, radiance, faces);
     RadianceMips mips;
     mips.voxelSize_ = voxels.voxelSize;
@@ -356,14 +381,10 @@ RadianceMips buildMips(const VoxelScene& voxels, const std::vector<vec3>& radian
     mips.boundsMax_ = (vec3(hi) + vec3(0.5f)) * h;
 
     mips.levels_.push_back(levelZero(voxels, radiance, faces));
-    while (!isSmallEnough(mips.levels_.back()) && mips.levelCount() < MipView::kMaxLevels) {
-        const int k = mips.levelCount();
-        mips.levels_.push_back(parentLevel(mips.levels_.back(), voxels.voxelSize, k));
-    }
-    // Each level's index grid is built on its own (the builder is serial); level 0 holds
-    // about three quarters of all voxels, so this hides the rest behind it.
-    mips.grids_.resize(size_t(mips.levelCount()));
-    tbb::parallel_for(0, mips.levelCount(), [&](int k) { mips.grids_[size_t(k)] = toIndexGrid(mips.levels_[size_t(k)], k); });
+    if (parents)
+        mips.addParentLevels();
+    else
+        mips.addIndexGrids();
     return mips;
 }
 
