@@ -75,7 +75,7 @@ struct BakeSettings {
     // A gather at every sample (gather level −1) keeps all the light in the cones.
     BrightPatchSettings brightPatches;
     // Rays or cones for the bounces' and the final gather's visibility (GatherVisibility), and
-    // the rays per axis of each point's n × n fan when rays: 16 × 16 at every bounce and at
+    // the rays per axis of each point's n × n fan when rays: 14 × 14 at every bounce and at
     // the final gather. The bounces trace their rays once (bake/ray_gather.h rayTransport);
     // when the final gather sends as many rays from the same points it applies the same
     // transport, so the bounces' rays cost only their time, once. Lightmap / image relative
@@ -83,10 +83,13 @@ struct BakeSettings {
     // 2026-11-24: rays 2.9% / 4.3%; 3.0% / 3.9%. Cones 5.9% / 6.3%; 5.8% / 6.4%. 8 × 8 rays at
     // the final gather: 3.3% / 4.7%; 3.4% / 4.5% (run of dec5125). Bounces of 8 × 8 rays
     // (before the transport) left the point box at 3.1% / 4.0% and the bright sealed rooms
-    // of scenes/two_rooms.gltf 2.6% too bright (16 × 16: 2.7% / 3.6%, +1.3%).
+    // of scenes/two_rooms.gltf 2.6% too bright (16 × 16: 2.7% / 3.6%, +1.3%). 14 × 14 since
+    // 2026-11-27: the same Cornell errors as 16 × 16 (2.5% / 4.1% quad, sixteen turns of it
+    // 2.99% at worst against 2.97%), the two rooms' lightmap 3.3% against 3.2%, for a quarter
+    // fewer rays (12 × 12 took a turned quad box to 3.01%).
     GatherVisibility gatherVisibility = GatherVisibility::Auto;
-    int gatherRays = 16;
-    int bounceRays = 16;
+    int gatherRays = 14;
+    int bounceRays = 14;
     LightmapSettings lightmap;
     DirectLightSettings direct;
     // A uniform sky's radiance, W/(m²·sr) (scene.h Sky; glTF has none): zero, no sky.

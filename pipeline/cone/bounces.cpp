@@ -98,7 +98,12 @@ Value sideValue(const SideWeights& weights, size_t slot, AtPoint&& atPoint, AtSe
     return sum;
 }
 
-SideWeights sideWeights(const VoxelScene& voxels, const IrradianceCacheView& cache) {
+// A side's home (visitCachePoints) is the point of its own layer (IrradianceCache::sidePoints)
+// where the side sees it, as the receivers' search mostly finds, without that search's ranking
+// of its cell's points: the Cornell quad box's bounces stage went from about 0.11 to 0.095 s
+// at 111 voxels (bake.json, fastest of 5). Taken without the path test too (0.088 s), a
+// turned box's lightmap lost 0.1 point (accuracy_rotations: 3.06% at worst, 2.97% with it).
+SideWeights sideWeights(const VoxelScene& voxels, const IrradianceCacheView& cache, const std::vector<uint32_t>& sidePoints) {
     // Fixed chunks of voxels, each filling its own arrays, joined in chunk order: the same
     // result at any thread count, and no allocation per voxel.
     struct Chunk {
@@ -118,10 +123,19 @@ SideWeights sideWeights(const VoxelScene& voxels, const IrradianceCacheView& cac
             const VoxelSides sides = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
             for (int s = 0; s < sides.count; ++s) {
                 const size_t begin = part.point.size();
-                const float total = visitCachePoints(cache, voxels.centre(i), sides.normal[s], [&](uint32_t q, float w) {
+                const auto take = [&](uint32_t q, float w) {
                     part.point.push_back(q);
                     part.weight.push_back(w);
-                });
+                };
+                const vec3 centre = voxels.centre(i);
+                const uint32_t own = sidePoints[i * 6 + size_t(s)];
+                const float h = cache.voxelSize;
+                const bool ownSeen =
+                    own != ~0u && clearPath(cache.occupancy, h, liftOffSurface(centre, sides.normal[s], h),
+                                            liftOffSurface(cache.points[own].position, cache.points[own].normal, h),
+                                            cache.surfacePlanes);
+                const float total = ownSeen ? visitFromHome(cache, own, centre, sides.normal[s], take)
+                                            : visitCachePoints(cache, centre, sides.normal[s], take);
                 for (size_t k = begin; k < part.weight.size(); ++k) part.weight[k] /= total;
                 part.perSlot[(i - first) * 6 + size_t(s)] = static_cast<uint32_t>(part.point.size() - begin);
                 if (part.point.size() == begin) part.selfGathered.push_back(static_cast<uint32_t>(i * 6 + size_t(s)));
@@ -199,7 +213,7 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
     RadianceMips mips = transportBuilder ? buildLevelZeroMips(voxels, isotropic(voxels, current), current)
                                          : buildRadianceMips(voxels, isotropic(voxels, current), current);
     cache.link(mips.view());
-    const SideWeights weights = sideWeights(voxels, cache.view(mips.view()));
+    const SideWeights weights = sideWeights(voxels, cache.view(mips.view()), cache.sidePoints());
     std::vector<vec3> selfIrradiance(weights.selfGathered.size());
     // By transport, the cache's points and then the self-gathered sides' are one map.
     const bool skyLit = sky && (maxComponent(sky->radiance) > 0.0f || sky->irradiance);

@@ -30,6 +30,7 @@ struct Side {
     int depth;
     uint32_t voxel;
     vec3 normal;
+    int side;  // its index among the voxel's sides (voxelSides)
 
     bool sameKey(const Side& o) const { return cell == o.cell && faceClass == o.faceClass; }
     bool operator<(const Side& o) const {
@@ -124,7 +125,7 @@ IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level, const Encl
         const ivec3 cell(cellOf(c.x, level), cellOf(c.y, level), cellOf(c.z, level));
         for (int k = 0; k < s.count; ++k) {
             const int faceClass = dominantAxisFace(s.normal[k]);
-            sides.push_back({cell, faceClass, c[faceClass / 2], static_cast<uint32_t>(i), s.normal[k]});
+            sides.push_back({cell, faceClass, c[faceClass / 2], static_cast<uint32_t>(i), s.normal[k], k});
         }
     }
     tbb::parallel_sort(sides.begin(), sides.end());
@@ -160,8 +161,11 @@ IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level, const Encl
     }
     layerBegin.push_back(sides.size());
     points_.resize(layerBegin.size() - 1);
+    sidePoints_.assign(n * 6, ~0u);
     tbb::parallel_for(size_t(0), points_.size(), [&](size_t p) {
         const size_t begin = layerBegin[p], count = layerBegin[p + 1] - begin;
+        for (size_t k = begin; k < begin + count; ++k)
+            sidePoints_[size_t(sides[k].voxel) * 6 + size_t(sides[k].side)] = static_cast<uint32_t>(p);
         glm::dvec3 normal(0.0);
         for (size_t k = begin; k < begin + count; ++k) normal += glm::dvec3(sides[k].normal);
         GatherPoint& point = points_[p];
@@ -260,7 +264,8 @@ IrradianceCacheView IrradianceCache::view(const MipView& mips) const {
 
 size_t IrradianceCache::memoryBytes() const {
     return cells_.size() + cellBegin_.size() * sizeof(uint32_t) + points_.size() * (sizeof(GatherPoint) + sizeof(vec3)) +
-           cellCoords_.size() * sizeof(ivec3) + (neighbourBegin_.size() + neighbours_.size()) * sizeof(uint32_t);
+           cellCoords_.size() * sizeof(ivec3) +
+           (neighbourBegin_.size() + neighbours_.size() + sidePoints_.size()) * sizeof(uint32_t);
 }
 
 }  // namespace vl

@@ -193,6 +193,10 @@ VL_HOSTDEV inline float cacheWeight(const GatherPoint& q, const vec3& p, const v
 // per receiver instead of one per point made the bounces' weights 4 times cheaper (the
 // bounces stage in bake.json of the default Cornell quad bake), at the same lightmap error.
 template <typename Visit>
+VL_HOSTDEV inline float visitFromHome(const IrradianceCacheView& cache, uint32_t home, const vec3& p, const vec3& n,
+                                      Visit&& visit);
+
+template <typename Visit>
 VL_HOSTDEV inline float visitCachePoints(const IrradianceCacheView& cache, const vec3& p, const vec3& n, Visit&& visit) {
     if (!cache.cells || cache.pointCount == 0 || !cache.neighbourBegin) return 0.0f;
     const float h = cache.voxelSize;
@@ -243,7 +247,16 @@ VL_HOSTDEV inline float visitCachePoints(const IrradianceCacheView& cache, const
             weight[best] = 0.0f;  // tried
         }
     }
-    if (home == ~0u) return 0.0f;
+    return visitFromHome(cache, home, p, n, visit);
+}
+
+// visitCachePoints from a home already known (~0u: none): the home's neighbours (itself
+// among them) with weight > 0 at (p, n).
+template <typename Visit>
+VL_HOSTDEV inline float visitFromHome(const IrradianceCacheView& cache, uint32_t home, const vec3& p, const vec3& n,
+                                      Visit&& visit) {
+    if (home == ~0u || !cache.neighbourBegin) return 0.0f;
+    const float inverseCell = 1.0f / ldexpf(cache.voxelSize, cache.level);
     float total = 0.0f;
     for (uint32_t k = cache.neighbourBegin[home]; k < cache.neighbourBegin[home + 1]; ++k) {
         const uint32_t q = cache.neighbours[k];
@@ -323,6 +336,9 @@ public:
     IrradianceCacheView view(const MipView& mips) const;
     const CellIndexGrid* cellGrid() const { return cells_.grid<int32_t>(); }
     const std::vector<uint32_t>& cellBegin() const { return cellBegin_; }
+    // The point of the layer that side k (voxelSides order) of voxel i belongs to, at slot
+    // 6·i + k; ~0u for slots with no side.
+    const std::vector<uint32_t>& sidePoints() const { return sidePoints_; }
     size_t memoryBytes() const;
 
 private:
@@ -334,6 +350,7 @@ private:
     std::vector<ivec3> cellCoords_;  // per cell slot
     std::vector<uint32_t> neighbourBegin_, neighbours_;
     std::vector<vec4> surfacePlanes_;  // per voxel (IrradianceCacheView::surfacePlanes)
+    std::vector<uint32_t> sidePoints_;  // per voxel side slot (sidePoints())
     int raysPerAxis_ = 0;
     nanovdb::GridHandle<nanovdb::HostBuffer> cells_;
 };
