@@ -8,6 +8,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <string>
 #include <utility>
 
@@ -52,27 +53,16 @@ std::vector<vec3> isotropic(const VoxelScene& voxels, const std::vector<FaceRadi
     return radiance;
 }
 
-// Σ over faces of axis weight × (r + g + b) of a − b: how much light one bounce added.
-// Summed in fixed chunks, each in order, and the chunks in order: the same double at any
-// thread count (the tail's ratio, and so the bake's bytes, depend on it).
-double addedLight(const VoxelScene& voxels, const std::vector<FaceRadiance>& a, const std::vector<FaceRadiance>& b) {
-    constexpr size_t kChunkVoxels = 4096;
-    const size_t chunks = (voxels.size() + kChunkVoxels - 1) / kChunkVoxels;
-    std::vector<double> partial(chunks, 0.0);
-    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
-        double sum = 0.0;
-        const size_t last = std::min(voxels.size(), (c + 1) * kChunkVoxels);
-        for (size_t i = c * kChunkVoxels; i < last; ++i)
-            for (size_t f = 0; f < 6; ++f) {
-                const vec3 d = a[i][f] - b[i][f];
-                sum += double(voxels.axisWeights[i][f]) * double(d.x + d.y + d.z);
-            }
-        partial[c] = sum;
-    });
-    double sum = 0.0;
-    for (double p : partial) sum += p;
-    return sum;
-}
+// How much light one bounce added: Σ over faces of axis weight × (r + g + b) of the new light
+// less the old, summed in fixed chunks, each in order, and the chunks in order: the same
+// double at any thread count (the tail's ratio, and so the bake's bytes, depend on it).
+constexpr size_t kAddedChunkVoxels = 4096;
+
+// A voxel's faces' sides (VoxelSides::sideOfFace, −1: no surface) and how many.
+struct FaceSides {
+    std::array<int8_t, 6> side;
+    int8_t count;
+};
 
 // Which gather points each voxel side reads and how much (visitCachePoints), computed once:
 // the points and the voxels do not move between bounces. Sides no point applies to gather
@@ -261,6 +251,14 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
         // Cones read the mips, built above from the light without the sky.
         if (!transport) mips.relight(voxels, isotropic(voxels, current), current);
     }
+    // Each voxel's faces' sides (voxelSides), once for every bounce below.
+    std::vector<FaceSides> faceSides(voxels.size());
+    tbb::parallel_for(size_t(0), voxels.size(), [&](size_t i) {
+        const VoxelSides sides = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
+        faceSides[i].count = static_cast<int8_t>(sides.count);
+        for (size_t f = 0; f < 6; ++f) faceSides[i].side[f] = static_cast<int8_t>(sides.sideOfFace[f]);
+    });
+    const size_t addedChunks = (voxels.size() + kAddedChunkVoxels - 1) / kAddedChunkVoxels;
     double added = 0.0, addedBefore = 0.0;  // light the last two bounces added
     std::vector<FaceRadiance> older;  // L two bounces before the last, for the tail's local ratios
     for (int b = 0; b < bounces; ++b) {
@@ -282,23 +280,33 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
         }
         const MipView view = mips.view();
         const IrradianceCacheView points = cache.view(view);
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, voxels.size()), [&](const tbb::blocked_range<size_t>& range) {
-            for (size_t i = range.begin(); i != range.end(); ++i) {
-                const VoxelSides sides = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
+        // The light this bounce adds is summed in the same pass (as addedLight sums it: fixed
+        // chunks, each in order, then the chunks in order).
+        std::vector<double> partial(addedChunks, 0.0);
+        tbb::parallel_for(size_t(0), addedChunks, [&](size_t c) {
+            double sum = 0.0;
+            const size_t last = std::min(voxels.size(), (c + 1) * kAddedChunkVoxels);
+            for (size_t i = c * kAddedChunkVoxels; i < last; ++i) {
+                const FaceSides& sides = faceSides[i];
                 vec3 e[6];
                 for (int s = 0; s < sides.count; ++s)
                     e[s] = sideValue<vec3>(
                         weights, i * 6 + size_t(s), [&](uint32_t q) { return points.irradiance[q]; },
                         [&](size_t k) { return selfIrradiance[k]; });
                 const vec3 reflectance = voxels.albedo[i] * kInvPi;
-                for (size_t f = 0; f < 6; ++f)
-                    next[i][f] = lit[i][f] + (sides.sideOfFace[f] >= 0 ? reflectance * e[sides.sideOfFace[f]] : vec3(0.0f));
+                for (size_t f = 0; f < 6; ++f) {
+                    next[i][f] = lit[i][f] + (sides.side[f] >= 0 ? reflectance * e[sides.side[f]] : vec3(0.0f));
+                    const vec3 d = next[i][f] - current[i][f];
+                    sum += double(voxels.axisWeights[i][f]) * double(d.x + d.y + d.z);
+                }
             }
+            partial[c] = sum;
         });
         if (progress) progress->advance(voxels.size());
         current.swap(next);
         addedBefore = added;
-        added = addedLight(voxels, current, next);
+        added = 0.0;
+        for (double p : partial) added += p;
     }
     // The series' tail: each further bounce adds r times what the last one did, so the rest
     // sums to ΔL·r/(1 − r) (Cohen et al. 1988's ambient term, from the iteration itself). r is
