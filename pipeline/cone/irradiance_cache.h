@@ -176,11 +176,15 @@ VL_HOSTDEV inline bool clearPath(const MipLevelView& occupancy, float h, const v
 // The interpolation weight of gather point q at surface point p with unit normal n (see
 // above), visibility aside; 0 where q does not apply.
 VL_HOSTDEV inline float cacheWeight(const GatherPoint& q, const vec3& p, const vec3& n, float inverseCell) {
+    // The tents along the axes first: most points a receiver's home links lie a cell or more
+    // away on some axis, and their weight is 0 whatever they face.
+    const vec3 d = p - q.position;
+    const vec3 tent = vec3(1.0f) - glm::abs(d) * inverseCell;
+    if (!(tent.x > 0.0f && tent.y > 0.0f && tent.z > 0.0f)) return 0.0f;
     const float facing = glm::dot(n, q.normal);
     if (!(facing > 0.0f)) return 0.0f;
-    const vec3 d = p - q.position;
     float w = facing * glm::max(0.0f, 1.0f - glm::abs(glm::dot(d, q.normal)) * inverseCell);
-    for (int a = 0; a < 3; ++a) w *= glm::max(0.0f, 1.0f - glm::abs(d[a]) * inverseCell);
+    for (int a = 0; a < 3; ++a) w *= tent[a];
     return w;
 }
 
