@@ -2,6 +2,7 @@
 // chooses rays over cones.
 #include "bake/bake_settings.h"
 #include "bake/ray_gather.h"
+#include "bake/shade_element.h"
 #include "cone/bounces.h"
 #include "core/error.h"
 #include "quad_scene.h"
@@ -87,6 +88,28 @@ TEST_CASE("Rays in a closed room whose every wall shows radiance L gather π·L 
         }
         CHECK(inside > E.size() / 2);
     }
+    // A receiver sample that no gather point applies to gathers so too, from level 0 alone
+    // (rayGatherAtSample, reading the texels through their index grid): on the walls, at
+    // points that lie anywhere in their voxels.
+    const RadianceMips levelZero = buildLevelZeroMips(lit, lit.radiance, lit.faceRadiance);
+    REQUIRE(levelZero.levelCount() == 1);
+    const MipView view = levelZero.view();
+    int samples = 0;
+    for (const Mesh& wall : scene.meshes)
+        for (float u : {0.13f, 0.5f, 0.91f})
+            for (float v : {0.07f, 0.42f, 0.77f}) {
+                const vec3 p = wall.positions[0] + u * (wall.positions[1] - wall.positions[0]) +
+                               v * (wall.positions[3] - wall.positions[0]);
+                const vec3 n = wall.normals[0];
+                vec3 tangent;
+                float turnOfFan;
+                gatherFrame(p, n, view.centre(), view.voxelSize, tangent, turnOfFan);
+                const vec3 E = rayGatherAtSample(t.scene.view(), t.bvh.view(), view, p, n, tangent, 0.3f, 16);
+                INFO(wall.name << " at u = " << u << ", v = " << v);
+                for (int c = 0; c < 3; ++c) CHECK(E[c] == Approx(kPi * L[c]).epsilon(0.005));
+                ++samples;
+            }
+    CHECK(samples == 54);
 }
 
 TEST_CASE("Rays read nothing behind the surface they hit", "[bake]") {

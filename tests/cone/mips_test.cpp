@@ -219,6 +219,41 @@ TEST_CASE("sampling between levels is linear in the level", "[cone]") {
     CHECK(coneSegment(view, p, dir, 40.0f, step) == coneSegment(view, p, dir, float(view.levelCount - 1), step));
 }
 
+TEST_CASE("level 0 built alone and completed later is the whole pyramid", "[cone]") {
+    // The gathers by rays build level 0 alone (buildLevelZeroMips); grids.vdb and cones add
+    // the coarser levels after (addParentLevels), from level 0 as the last relight left it.
+    // That must be the pyramid buildRadianceMips makes of the same radiance, texel for texel.
+    const VoxelScene v = dyadicScene(400, ivec3(-8), 24, 7);
+    REQUIRE(v.axisWeights.size() == v.size());
+    std::vector<FaceRadiance> faces(v.size());
+    for (size_t i = 0; i < v.size(); ++i)
+        for (size_t f = 0; f < 6; ++f)
+            faces[i][f] = v.axisWeights[i][f] > 0.0f ? vec3(0.1f * float(f + 1), float(i % 7), 0.5f) : vec3(0.0f);
+    std::vector<vec3> radiance(v.size());
+    for (size_t i = 0; i < v.size(); ++i) radiance[i] = faceWeightedMean(faces[i].data(), v.axisWeights[i].data());
+    const RadianceMips whole = buildRadianceMips(v, radiance, faces);
+    REQUIRE(whole.levelCount() > 2);
+    // Built first from other light, then relit, as the bounces do.
+    std::vector<FaceRadiance> dark(v.size(), FaceRadiance{});
+    RadianceMips completed = buildLevelZeroMips(v, std::vector<vec3>(v.size(), vec3(0.0f)), dark);
+    CHECK(completed.levelCount() == 1);
+    completed.relight(v, radiance, faces);
+    completed.addParentLevels();
+    REQUIRE(completed.levelCount() == whole.levelCount());
+    for (int k = 0; k < whole.levelCount(); ++k) {
+        INFO("level " << k);
+        const MipLevel& a = whole.level(k);
+        const MipLevel& b = completed.level(k);
+        REQUIRE(a.coords == b.coords);
+        REQUIRE(a.texels.size() == b.texels.size());
+        for (size_t t = 0; t < a.texels.size(); ++t) {
+            CHECK(a.texels[t].radiance == b.texels[t].radiance);
+            CHECK(a.texels[t].alpha == b.texels[t].alpha);
+        }
+        CHECK(completed.indexGrid(k)->activeVoxelCount() == whole.indexGrid(k)->activeVoxelCount());
+    }
+}
+
 TEST_CASE("mip grids for the vdb file hold every level", "[cone]") {
     const VoxelScene scene = dyadicScene(200, ivec3(0, 0, 0), 12, 29);
     const RadianceMips mips = buildRadianceMips(scene);
