@@ -84,8 +84,14 @@ void lightLevelZero(MipLevel& level, const VoxelScene& voxels, const std::vector
         const float alpha = voxels.solid[i] ? 1.0f : voxels.opacity[i];
         level.values[i] = vec4(alpha * radiance[i], alpha);
         MipTexel* texels = &level.texels[i * kFaceCount];
+        // The six texels share the voxel's α, and so its density: one logarithm, not six.
+        MipTexel shared;
+        if (!RadianceOnly) shared = makeTexel(vec3(0.0f), alpha, alpha);
         if (!faces) {
-            for (int travel = 0; travel < kFaceCount; ++travel) texels[travel] = makeTexel(alpha * radiance[i], alpha, alpha);
+            for (int travel = 0; travel < kFaceCount; ++travel) {
+                if (!RadianceOnly) texels[travel] = shared;
+                texels[travel].radiance = alpha * radiance[i];
+            }
             return;
         }
         const AxisWeights& w = voxels.axisWeights[i];
@@ -95,10 +101,11 @@ void lightLevelZero(MipLevel& level, const VoxelScene& voxels, const std::vector
             const int face = facingFace(travel);
             const float weight = w[size_t(face)];
             const float share = largest > 0.0f && weight > 0.0f && std::isfinite(weight) ? weight / largest : 0.0f;
-            if (RadianceOnly)
-                texels[travel].radiance = share * alpha * (*faces)[i][size_t(face)];
-            else
-                texels[travel] = makeTexel(share * alpha * (*faces)[i][size_t(face)], alpha, share * alpha);
+            if (!RadianceOnly) {
+                texels[travel] = shared;
+                texels[travel].coverage = share * alpha;
+            }
+            texels[travel].radiance = share * alpha * (*faces)[i][size_t(face)];
         }
     });
 }
