@@ -6,14 +6,14 @@
 //  * the scene's size: kSceneVoxels voxels along its longest side, measured in its own frame
 //    (the axes of its most common surface orientations) so a scene modelled at an angle to
 //    the world axes gets the voxels it would get unturned. 111: the coarsest count at which
-//    the Cycles quad box's lightmap meets issue 13's 3% against Cycles (95 voxels: 3.3%,
-//    111: 2.8%, in 0.60 s; `voxlight bench`, 2026-11-24, gathering by rays). By error² ×
-//    time 63 voxels is cheaper on both Cornell boxes (111 is 1.16–1.70× its figure); on the
-//    two rooms 111 is 1.06 / 1.19× the best (lightmap / image), on zdm2 the best once its
-//    reference's noise is taken out. 63 was the rule while the gathers went by cones, whose error did not fall with
-//    finer voxels (quad 4.9% at 63, 5.9% at 111). Tried and not taken: 6 voxels along the
-//    median free path between surfaces (103 on zdm2: 28.0% image error against 31.3% at 63,
-//    by cones, but 1.2× the error² × time).
+//    the Cycles quad box's lightmap meets issue 13's 3% against Cycles at each of sixteen
+//    turns (2.40–2.92%; 103 voxels: 3.11%, 95: 3.30%; build/accuracy/accuracy_rotations,
+//    2026-11-27). By error² × time alone 63–79 voxels are cheaper on both Cornell boxes (111
+//    is 1.26 / 1.50× the best lightmap point, `voxlight bench`, 2026-11-27); on the two rooms
+//    111 is the best lightmap point. 63 was the rule while the gathers went by cones, whose
+//    error did not fall with finer voxels (quad 4.9% at 63, 5.9% at 111). Tried and not
+//    taken: 6 voxels along the median free path between surfaces (103 on zdm2: 28.0% image
+//    error against 31.3% at 63, by cones, but 1.2× the error² × time).
 //  * each point or spot light's clearance, its distance to the nearest surface: a light less
 //    than about half a voxel from a surface falls into that surface's voxel layer and loses
 //    most of the light it gives the bounces (a point light 0.32 voxel under a ceiling: −21% of
