@@ -227,7 +227,7 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
     const bool gathers =
         settings.bounces > 0 || (settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images));
     const EnclosedProbe enclosed = enclosedSurfaceProbe(bvhView, sceneView);
-    RadianceMips bounced;          // the bounces' own mips, relit with their result
+    RadianceMips bounced;          // the bounces' own mips, relit with their result (level 0 alone by rays)
     IrradianceCache bouncePoints;  // and their gather points, probed here, linked over them
     result.gatherVisibility = timed(result.stages, "visibility", [&] {
         if (gathers) {
@@ -274,9 +274,7 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
     const bool reusePoints = bounced.levelCount() > 0 && settings.bounceGatherLevel == settings.gatherLevel;
     result.mips = timed(result.stages, "mips", [&] {
         if (bounced.levelCount() > 0) return std::move(bounced);
-        const VoxelScene& voxels = result.voxels;
-        return byRays && !voxels.faceRadiance.empty() ? buildLevelZeroMips(voxels, voxels.radiance, voxels.faceRadiance)
-                                                      : buildRadianceMips(voxels);
+        return buildRadianceMipsFor(result.voxels, byRays ? MipReaders::RaysOnly : MipReaders::Cones);
     });
     const MipView mipView = result.mips.view();
 
@@ -326,6 +324,9 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
         });
         result.gatherPoints = cache.points().size();
     }
+    // Receivers with no gather points to interpolate (gather level −1) trace their own cones,
+    // through every level of the mips.
+    if (result.gatherPoints == 0) result.mips.addParentLevels();
     return stages;
 }
 

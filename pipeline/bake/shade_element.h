@@ -173,8 +173,14 @@ VL_HOSTDEV inline vec3 indirectIrradiance(const TraceSceneView& scene, const Bvh
     vec3 tangent;
     float positionTurn;
     gatherFrame(position, sample.normal, mips.centre(), mips.voxelSize, tangent, positionTurn);
-    if (cache && cache->raysPerAxis > 0)
-        return rayGatherAtSample(scene, bvh, mips, position, sample.normal, tangent, coneTurn(seed), cache->raysPerAxis);
+    if (cache && cache->raysPerAxis > 0) {
+        // A moved sample's rays start at the voxel centre it was found to be seen from (its
+        // lifted point); moved[0] itself lies up to half a voxel below its own surface.
+        const vec3 origin =
+            count > 0 ? moved[0] + (liftOffSurface(sample.position, sample.normal, mips.voxelSize) - sample.position)
+                      : sample.position;
+        return rayGatherAtSample(scene, bvh, mips, origin, sample.normal, tangent, coneTurn(seed), cache->raysPerAxis);
+    }
     return coneTraceIrradiance(mips, position, sample.normal, set, cone, nullptr, coneTurn(seed), &tangent);
 }
 

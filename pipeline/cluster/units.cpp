@@ -315,12 +315,10 @@ BakeReport mergeScene(const BakeJob& job, const std::string& sceneWork, const Sc
         const Scene scene = receiverScene(std::move(loaded), state);
         BakeResult result = std::move(state.result);
         report.stages.insert(report.stages.end(), result.stages.begin(), result.stages.end());
-        // As the bake left them: level 0 alone where it gathered by rays (writeBakeFiles adds
-        // the coarser levels for grids.vdb).
-        const VoxelScene& voxels = result.voxels;
-        result.mips = result.gatherVisibility.visibility == GatherVisibility::Rays && !voxels.faceRadiance.empty()
-                          ? buildLevelZeroMips(voxels, voxels.radiance, voxels.faceRadiance)
-                          : buildRadianceMips(voxels);
+        // As the bake left them: level 0 alone where its final gather went by rays
+        // (writeBakeFiles adds the coarser levels for grids.vdb).
+        const bool byRays = result.gatherVisibility.visibility == GatherVisibility::Rays && state.gathered;
+        result.mips = buildRadianceMipsFor(result.voxels, byRays ? MipReaders::RaysOnly : MipReaders::Cones);
 
         double lightmapSeconds = 0.0, imageSeconds = 0.0;
         if (job.settings.outputs.lightmaps) {

@@ -209,9 +209,10 @@ Scene receiverScene(Scene loaded, const VoxelState& state) {
 RebuiltGather rebuildGather(const VoxelState& state, const ReceiverScene& tracing, int gatherRaysPerAxis) {
     RebuiltGather gather;
     const VoxelScene& voxels = state.result.voxels;
-    const bool byRays = state.result.gatherVisibility.visibility == GatherVisibility::Rays;
-    gather.mips = byRays && !voxels.faceRadiance.empty() ? buildLevelZeroMips(voxels, voxels.radiance, voxels.faceRadiance)
-                                                         : buildRadianceMips(voxels);
+    // As the bake left them (bakeVoxelStages): level 0 alone where the final gather went by
+    // rays, every level where cones read them.
+    const bool byRays = state.result.gatherVisibility.visibility == GatherVisibility::Rays && state.gathered;
+    gather.mips = buildRadianceMipsFor(voxels, byRays ? MipReaders::RaysOnly : MipReaders::Cones);
     if (state.gathered) {
         const EnclosedProbe enclosed = enclosedSurfaceProbe(tracing.bvh.view(), tracing.traceScene.view());
         gather.cache = IrradianceCache(state.result.voxels, state.gatherLevel, &enclosed);

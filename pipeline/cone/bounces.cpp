@@ -94,6 +94,9 @@ Value sideValue(const SideWeights& weights, size_t slot, AtPoint&& atPoint, AtSe
 // at 111 voxels (bake.json, fastest of 5). Taken without the path test too (0.088 s), a
 // turned box's lightmap lost 0.1 point (accuracy_rotations: 3.06% at worst, 2.97% with it).
 SideWeights sideWeights(const VoxelScene& voxels, const IrradianceCacheView& cache, const std::vector<uint32_t>& sidePoints) {
+    if (sidePoints.size() != voxels.size() * 6)
+        throw Error("propagateBounces(" + voxels.sourceScene + "): the gather points were made for " +
+                    std::to_string(sidePoints.size() / 6) + " voxels, not " + std::to_string(voxels.size()));
     // Fixed chunks of voxels, each filling its own arrays, joined in chunk order: the same
     // result at any thread count, and no allocation per voxel.
     struct Chunk {
@@ -124,8 +127,12 @@ SideWeights sideWeights(const VoxelScene& voxels, const IrradianceCacheView& cac
                     own != ~0u && clearPath(cache.occupancy, h, liftOffSurface(centre, sides.normal[s], h),
                                             liftOffSurface(cache.points[own].position, cache.points[own].normal, h),
                                             cache.surfacePlanes);
-                const float total = ownSeen ? visitFromHome(cache, own, centre, sides.normal[s], take)
-                                            : visitCachePoints(cache, centre, sides.normal[s], take);
+                float total = ownSeen ? visitFromHome(cache, own, centre, sides.normal[s], take) : 0.0f;
+                if (!(total > 0.0f)) {
+                    part.point.resize(begin);
+                    part.weight.resize(begin);
+                    total = visitCachePoints(cache, centre, sides.normal[s], take);
+                }
                 for (size_t k = begin; k < part.weight.size(); ++k) part.weight[k] /= total;
                 part.perSlot[(i - first) * 6 + size_t(s)] = static_cast<uint32_t>(part.point.size() - begin);
                 if (part.point.size() == begin) part.selfGathered.push_back(static_cast<uint32_t>(i * 6 + size_t(s)));
@@ -219,6 +226,13 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
             throw Error("propagateBounces(" + voxels.sourceScene + "): the transport maps " +
                         std::to_string(transport->pointCount()) + " points, not " + std::to_string(points.size()));
     }
+    // Each voxel's faces' sides (voxelSides), once for the sky and every bounce below.
+    std::vector<FaceSides> faceSides(voxels.size());
+    tbb::parallel_for(size_t(0), voxels.size(), [&](size_t i) {
+        const VoxelSides sides = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
+        faceSides[i].count = static_cast<int8_t>(sides.count);
+        for (size_t f = 0; f < 6; ++f) faceSides[i].side[f] = static_cast<int8_t>(sides.sideOfFace[f]);
+    });
     if (skyLit) {
         std::vector<vec3> skyE;
         if (sky->irradiance && transport && sky->imageDraws && transport->skyCosine.size() == points.size()) {
@@ -237,10 +251,9 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
                         std::to_string(skyE.size()) + " points, not " + std::to_string(points.size()));
         const size_t cachePoints = cache.points().size();
         tbb::parallel_for(size_t(0), voxels.size(), [&](size_t i) {
-            const VoxelSides sides = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
             const vec3 reflectance = voxels.albedo[i] * kInvPi;
             for (size_t f = 0; f < 6; ++f) {
-                const int s = sides.sideOfFace[f];
+                const int s = faceSides[i].side[f];
                 if (s < 0) continue;
                 lit[i][f] += reflectance * sideValue<vec3>(
                                                weights, i * 6 + size_t(s), [&](uint32_t q) { return skyE[q]; },
@@ -251,13 +264,6 @@ void propagateBounces(VoxelScene& voxels, const ConeSettings& settings, int boun
         // Cones read the mips, built above from the light without the sky.
         if (!transport) mips.relight(voxels, isotropic(voxels, current), current);
     }
-    // Each voxel's faces' sides (voxelSides), once for every bounce below.
-    std::vector<FaceSides> faceSides(voxels.size());
-    tbb::parallel_for(size_t(0), voxels.size(), [&](size_t i) {
-        const VoxelSides sides = voxelSides(voxels.normal[i], voxels.axisWeights[i].data());
-        faceSides[i].count = static_cast<int8_t>(sides.count);
-        for (size_t f = 0; f < 6; ++f) faceSides[i].side[f] = static_cast<int8_t>(sides.sideOfFace[f]);
-    });
     const size_t addedChunks = (voxels.size() + kAddedChunkVoxels - 1) / kAddedChunkVoxels;
     double added = 0.0, addedBefore = 0.0;  // light the last two bounces added
     std::vector<FaceRadiance> older;  // L two bounces before the last, for the tail's local ratios

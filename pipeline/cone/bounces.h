@@ -69,7 +69,9 @@ enum class BounceTail {
 // solid do not match the voxel count. `progress`, when given, advances by the voxel count
 // once per bounce. `mips`, when given and bounces > 0, receives the radiance mips of the
 // result: the bounces' own mips relit, the same bytes as buildRadianceMips(voxels) afterwards
-// (RadianceMips::relight), without building the levels and index grids a second time.
+// (RadianceMips::relight), without building the levels and index grids a second time; by a
+// transport (rays, which read level 0 alone) level 0 alone, as buildLevelZeroMips gives it
+// (RadianceMips::addParentLevels adds the rest).
 // `cache`, likewise, receives the bounces' gather points at gatherLevel, linked over those
 // mips (the topology a final gather at the same level builds and links again); when it
 // already holds points at gatherLevel (the caller's, of these voxels: the bake probes them

@@ -176,6 +176,7 @@ IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level, const Encl
         gatherFrame(point.position, point.normal, centre, cellSize, point.tangent, point.turn);
     });
     nanovdb::GridBuilder<int32_t> builder(-1);
+    builder.setStats(nanovdb::StatsMode::BBox);  // the index needs no value statistics
     auto accessor = builder.getAccessor();
     for (size_t p = 0; p < points_.size(); ++p) {
         const size_t begin = layerBegin[p];

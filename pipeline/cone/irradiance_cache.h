@@ -298,7 +298,7 @@ VL_HOSTDEV inline bool interpolateIrradiance(const IrradianceCacheView& cache, c
 // Whether the surface side at `position` (a voxel's surface point, lifted half a voxel off it)
 // facing `normal` lies inside closed geometry, where no light reaches: a floor under a block
 // standing on it. The voxels cannot tell (a block's walls are one voxel thick and its inside
-// empty); the bake answers with rays (bake/enclosed_probe.h).
+// empty); the bake answers with rays (bake/ray_gather.h enclosedSurfaceProbe).
 using EnclosedProbe = std::function<bool(const vec3& position, const vec3& normal)>;
 
 class IrradianceCache {

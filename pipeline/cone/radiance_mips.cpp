@@ -276,6 +276,7 @@ bool isSmallEnough(const MipLevel& level) {
 
 nanovdb::GridHandle<nanovdb::HostBuffer> toIndexGrid(const MipLevel& level, int k) {
     nanovdb::GridBuilder<int32_t> builder(-1);
+    builder.setStats(nanovdb::StatsMode::BBox);  // the index needs no value statistics
     auto accessor = builder.getAccessor();
     for (size_t i = 0; i < level.coords.size(); ++i) {
         const ivec3& c = level.coords[i];
@@ -351,6 +352,12 @@ RadianceMips buildRadianceMips(const VoxelScene& voxels, const std::vector<vec3>
 RadianceMips buildLevelZeroMips(const VoxelScene& voxels, const std::vector<vec3>& radiance,
                                 const std::vector<FaceRadiance>& faceRadiance) {
     return buildMips(voxels, radiance, &faceRadiance, false);
+}
+
+RadianceMips buildRadianceMipsFor(const VoxelScene& voxels, MipReaders readers) {
+    if (readers == MipReaders::RaysOnly && !voxels.faceRadiance.empty())
+        return buildLevelZeroMips(voxels, voxels.radiance, voxels.faceRadiance);
+    return buildRadianceMips(voxels);
 }
 
 void RadianceMips::addParentLevels() {

@@ -166,8 +166,9 @@ public:
     MipView view() const;
     size_t memoryBytes() const;  // index grids and texel arrays of all levels
     // New radiance on the same voxels (what the bounces do once per bounce): the texels and
-    // values are recomputed, the topology and index grids kept. The same result as
-    // buildRadianceMips(voxels, radiance, faceRadiance) with the same checks.
+    // values of the levels there are recomputed, the topology and index grids kept. The same
+    // result as building them anew (buildRadianceMips, or buildLevelZeroMips for level 0
+    // alone) with the same checks.
     void relight(const VoxelScene& voxels, const std::vector<vec3>& radiance,
                  const std::vector<FaceRadiance>& faceRadiance);
     // The coarser levels of mips built with level 0 alone (buildLevelZeroMips), from level 0's
@@ -205,6 +206,13 @@ RadianceMips buildRadianceMips(const VoxelScene& voxels, const std::vector<vec3>
 // voxels). addParentLevels adds them where cones or grids.vdb want them.
 RadianceMips buildLevelZeroMips(const VoxelScene& voxels, const std::vector<vec3>& radiance,
                                 const std::vector<FaceRadiance>& faceRadiance);
+
+// Who reads a bake's mips: cones (every level), or only rays (level 0: the gathers by rays
+// and the receivers their points do not reach).
+enum class MipReaders { Cones, RaysOnly };
+// The mips of voxels.radiance (and faceRadiance) as `readers` need them: level 0 alone for
+// RaysOnly where the voxels have face radiance, buildRadianceMips otherwise.
+RadianceMips buildRadianceMipsFor(const VoxelScene& voxels, MipReaders readers);
 
 // Grids for grids.vdb: per level k, `radiance_mip<k>` (Vec3, the isotropic α-premultiplied
 // radiance) and `opacity_mip<k>` (float α), voxel size 2^k·h, level k's voxel I centred in

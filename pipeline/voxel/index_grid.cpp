@@ -12,6 +12,7 @@ nanovdb::GridHandle<nanovdb::HostBuffer> buildIndexGrid(const VoxelScene& voxels
     if (voxels.size() > static_cast<size_t>(std::numeric_limits<int32_t>::max()))
         throw Error("buildIndexGrid: more active voxels than a 32-bit index holds");
     nanovdb::GridBuilder<int32_t> builder(-1);
+    builder.setStats(nanovdb::StatsMode::BBox);  // the index needs no value statistics
     auto accessor = builder.getAccessor();
     for (size_t i = 0; i < voxels.size(); ++i) {
         const ivec3& c = voxels.coords[i];

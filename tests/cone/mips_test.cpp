@@ -249,7 +249,11 @@ TEST_CASE("level 0 built alone and completed later is the whole pyramid", "[cone
         for (size_t t = 0; t < a.texels.size(); ++t) {
             CHECK(a.texels[t].radiance == b.texels[t].radiance);
             CHECK(a.texels[t].alpha == b.texels[t].alpha);
+            CHECK(a.texels[t].density == b.texels[t].density);
+            CHECK(a.texels[t].coverage == b.texels[t].coverage);
         }
+        REQUIRE(a.values.size() == b.values.size());
+        for (size_t i = 0; i < a.values.size(); ++i) CHECK(a.values[i] == b.values[i]);
         CHECK(completed.indexGrid(k)->activeVoxelCount() == whole.indexGrid(k)->activeVoxelCount());
     }
 }
