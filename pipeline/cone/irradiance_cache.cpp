@@ -33,6 +33,7 @@ struct Side {
     int side;  // its index among the voxel's sides (voxelSides)
 
     bool sameKey(const Side& o) const { return cell == o.cell && faceClass == o.faceClass; }
+    bool sameCell(const Side& o) const { return cell == o.cell; }
     bool operator<(const Side& o) const {
         if (cell.x != o.cell.x) return cell.x < o.cell.x;
         if (cell.y != o.cell.y) return cell.y < o.cell.y;
@@ -160,6 +161,23 @@ IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level, const Encl
         begin = end;
     }
     layerBegin.push_back(sides.size());
+    // Whether another surface crosses layer p's cell: a layer along another axis, or another
+    // of its own class (a parallel surface a voxel or more away). Only such a surface can close
+    // off part of the layer; a closed shape whose wall does not cross the cell holds all of it
+    // or none, and the point stays at the mean. The layer of the same sheet's other side (the
+    // opposite class, on the same axis) does not count.
+    const auto crossed = [&](size_t p) {
+        const Side& own = sides[layerBegin[p]];
+        const auto other = [&](size_t r) {
+            const Side& side = sides[layerBegin[r]];
+            return side.faceClass / 2 != own.faceClass / 2 || side.faceClass == own.faceClass;
+        };
+        for (size_t r = p; r > 0 && sides[layerBegin[r - 1]].sameCell(own); --r)
+            if (other(r - 1)) return true;
+        for (size_t r = p + 1; r + 1 < layerBegin.size() && sides[layerBegin[r]].sameCell(own); ++r)
+            if (other(r)) return true;
+        return false;
+    };
     points_.resize(layerBegin.size() - 1);
     sidePoints_.assign(n * 6, ~0u);
     tbb::parallel_for(size_t(0), points_.size(), [&](size_t p) {
@@ -169,7 +187,7 @@ IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level, const Encl
         glm::dvec3 normal(0.0);
         for (size_t k = begin; k < begin + count; ++k) normal += glm::dvec3(sides[k].normal);
         GatherPoint& point = points_[p];
-        point.position = layerPosition(voxels, &sides[begin], count, level, enclosed);
+        point.position = layerPosition(voxels, &sides[begin], count, level, crossed(p) ? enclosed : nullptr);
         const double length = glm::length(normal);
         // Side normals of one class all lean the same way, so the sum is far from zero.
         point.normal = length > 0.0 ? vec3(normal / length) : sides[begin].normal;
