@@ -95,7 +95,7 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          }},
         {"lightmap-subsamples", "n × n sub-texel probes per texel (default 4)",
          [](S& s, const std::string& v) { s.lightmap.subsamplesPerAxis = parseIntSetting("lightmap-subsamples", v, 1, 8); }},
-        {"emitter-strata", "n × n shadow points per emissive triangle for the exact direct term, ⌈n√2⌉² per parallelogram quad (default 5)",
+        {"emitter-strata", "n × n shadow points per emissive triangle for the exact direct term, ⌈n√2⌉² per parallelogram quad (default 4)",
          [](S& s, const std::string& v) { s.direct.emitterStrata = parseIntSetting("emitter-strata", v, 1, 64); }},
         {"sky", "a uniform sky's radiance R,G,B in W/(m²·sr), seen wherever the scene does not block it (default 0: none)",
          [](S& s, const std::string& v) {

@@ -20,13 +20,14 @@
 namespace vl {
 
 struct DirectLightSettings {
-    // n: n × n visibility points per emissive triangle, ⌈n√2⌉² per parallelogram quad. 5: the
-    // Cycles quad box's lightmap holds issue 13's 3% at each of 16 random turns (2.41–2.91%,
-    // `build/accuracy/accuracy_rotations`), where 4 left one at 3.09%; it costs the lightmap
-    // stage 0.047 → 0.057 s (bake.json of `build/voxlight bake
-    // ../shared/reference/cornell_quad.gltf --emitter-strata N`, fastest of 3), only in
-    // penumbrae.
-    int emitterStrata = 5;
+    // n: n × n visibility points per emissive triangle, ⌈n√2⌉² per parallelogram quad (36 at
+    // 4, 64 at 5), only in penumbrae. 4: the Cycles quad box's lightmap holds issue 13's 3% at
+    // each of 16 random turns (2.45–2.98%, `build/accuracy/accuracy_rotations`, 2026-11-27),
+    // and its bench times are 5% / 7% under n = 5's (lightmap / image, `voxlight bench --vct ''
+    // --vct emitter-strata=4`), for errors 2.54% / 4.19% against 2.49% / 4.15%: less error²
+    // × time for both. n = 5 was the default while the gather points' placement left a turn
+    // at 3.09% with n = 4.
+    int emitterStrata = 4;
     // m: m × m stratified cosine-weighted directions per receiver sample that look for the
     // sky (Scene::sky). On the open Cycles Cornell box under a uniform sky (lightmap 70%
     // direct) m = 8 / 10 / 12 / 16 give the lightmap 5.6% / 4.2% / 3.5% / 2.7% relative RMSE
