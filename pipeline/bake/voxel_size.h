@@ -7,7 +7,7 @@
 //    (the axes of its most common surface orientations) so a scene modelled at an angle to
 //    the world axes gets the voxels it would get unturned. 111: the coarsest count at which
 //    the Cycles quad box's lightmap meets issue 13's 3% against Cycles at each of sixteen
-//    turns (2.40–2.92%; 103 voxels: 3.11%, 95: 3.30%; build/accuracy/accuracy_rotations,
+//    turns (2.45–2.98%; 103 voxels: 3.11%, 95: 3.30%; build/accuracy/accuracy_rotations,
 //    2026-11-27). By error² × time alone 63–79 voxels are cheaper on both Cornell boxes (111
 //    is 1.26 / 1.50× the best lightmap point, `voxlight bench`, 2026-11-27); on the two rooms
 //    111 is the best lightmap point. 63 was the rule while the gathers went by cones, whose
