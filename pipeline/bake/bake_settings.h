@@ -84,9 +84,11 @@ struct BakeSettings {
     // the final gather: 3.3% / 4.7%; 3.4% / 4.5% (run of dec5125). Bounces of 8 × 8 rays
     // (before the transport) left the point box at 3.1% / 4.0% and the bright sealed rooms
     // of scenes/two_rooms.gltf 2.6% too bright (16 × 16: 2.7% / 3.6%, +1.3%). 14 × 14 since
-    // 2026-11-27: the same Cornell errors as 16 × 16 (2.5% / 4.1% quad, sixteen turns of it
-    // 2.99% at worst against 2.97%), the two rooms' lightmap 3.3% against 3.2%, for a quarter
-    // fewer rays (12 × 12 took a turned quad box to 3.01%).
+    // 2026-11-27: the same Cornell errors as 16 × 16 (2.5% / 4.1% quad, `voxlight bench`;
+    // sixteen turns of it 2.99% at worst against 2.97%, `build/accuracy/accuracy_rotations`),
+    // the two rooms' lightmap 3.3% against 3.2% (`voxlight bench scenes/two_rooms.gltf`), for
+    // a quarter fewer rays: the bench's default 0.24 s against 0.25 s (12 × 12 took a turned
+    // quad box to 3.01%).
     GatherVisibility gatherVisibility = GatherVisibility::Auto;
     int gatherRays = 14;
     int bounceRays = 14;

@@ -1,7 +1,7 @@
 #include "bake/ray_gather.h"
 
 #include "bake/direct_light.h"
-#include "bake/hit_texels.h"
+#include "bake/fan_rays.h"
 #include "bake/shade_element.h"
 
 #include "cone/cone_trace.h"
@@ -36,16 +36,14 @@ void checkRays(int raysPerAxis) {
 
 // Where a point's rays start and the frame they are laid out in.
 struct RayFan {
-    vec3 origin, normal, tangent, bitangent;
+    vec3 origin;
+    FanFrame frame;
 };
 
 RayFan rayFan(const GatherPoint& point, float h, const BvhView& bvh, const TraceSceneView& scene) {
     RayFan fan;
-    fan.normal = point.normal;
-    const float angle = 2.0f * kPi * point.turn;
+    fan.frame = fanFrame(point.normal, point.tangent, point.turn);
     const vec3 across = glm::cross(point.normal, point.tangent);
-    fan.tangent = std::cos(angle) * point.tangent + std::sin(angle) * across;
-    fan.bitangent = glm::cross(point.normal, fan.tangent);
     // The point's surface under it; where none lies within three voxels under it (the point's
     // voxels straddle the surface's edge), under a point a voxel to one side. The side tries
     // matter only on turned scenes and little there: the worst of four random turns of the
@@ -78,8 +76,7 @@ std::vector<vec3> fanPattern(int n) {
     std::vector<vec3> pattern;
     pattern.reserve(size_t(n) * size_t(n));
     for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j)
-            pattern.push_back(sampleCosineHemisphere(vec2((float(i) + 0.5f) / float(n), (float(j) + 0.5f) / float(n))));
+        for (int j = 0; j < n; ++j) pattern.push_back(fanDirection(i, j, n));
     return pattern;
 }
 
@@ -90,7 +87,7 @@ void traceFan(const RayFan& fan, const std::vector<vec3>& pattern, const BvhView
     for (const vec3& d : pattern) {
         Ray ray;
         ray.origin = fan.origin;
-        ray.direction = glm::normalize(d.x * fan.tangent + d.y * fan.bitangent + d.z * fan.normal);
+        ray.direction = inFrame(fan.frame, d);
         Hit hit;
         if (intersectClosest(bvh, ray, hit))
             onHit(ray, hit);
@@ -257,7 +254,7 @@ FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView
             vec3 sky(0.0f);
             const auto escaped = [&](const Ray& ray) {
                 if (imageSky)
-                    sky += skyShare(skySeenAlong(scene.sky, ray.direction), glm::dot(fan.normal, ray.direction), cosineRays,
+                    sky += skyShare(skySeenAlong(scene.sky, ray.direction), glm::dot(fan.frame.normal, ray.direction), cosineRays,
                                     imageDraws);
             };
             traceFan(fan, pattern, bvh, escaped, [&](const Ray& ray, const Hit& hit) {
@@ -326,7 +323,7 @@ std::vector<float> skyOpenness(const std::vector<GatherPoint>& points, float vox
 std::vector<vec3> skyIrradianceAtPoints(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
                                         const TraceSceneView& scene, int strata) {
     return perFan<vec3>(points, voxelSize, bvh, scene, [&](size_t q, const RayFan& fan) {
-        return skyIrradiance(scene, bvh, fan.origin, fan.normal, fan.normal, strata, uint64_t(q));
+        return skyIrradiance(scene, bvh, fan.origin, fan.frame.normal, fan.frame.normal, strata, uint64_t(q));
     });
 }
 
@@ -334,7 +331,7 @@ std::vector<vec3> skyImageDrawsAtPoints(const std::vector<GatherPoint>& points, 
                                         const TraceSceneView& scene, int drawsPerAxis, int raysPerAxis) {
     const float cosineRays = float(raysPerAxis * raysPerAxis);
     return perFan<vec3>(points, voxelSize, bvh, scene, [&](size_t q, const RayFan& fan) {
-        return skyImageDrawsIrradiance(scene, bvh, fan.origin, fan.normal, fan.normal, drawsPerAxis, cosineRays,
+        return skyImageDrawsIrradiance(scene, bvh, fan.origin, fan.frame.normal, fan.frame.normal, drawsPerAxis, cosineRays,
                                        uint64_t(q));
     });
 }

@@ -4,7 +4,7 @@
 #pragma once
 
 #include "bake/direct_light.h"
-#include "bake/hit_texels.h"
+#include "bake/fan_rays.h"
 #include "cone/cone_set.h"
 #include "cone/cone_trace.h"
 #include "cone/irradiance_cache.h"
@@ -27,8 +27,9 @@ namespace vl {
 // (its direct term, from shadow rays, is already zero). The majority rule keeps an open
 // receiver open where a few surfaces face away from it (an exporter's flipped wall). A
 // sample that a light reaches is open to it and is not probed: its eight or more probe rays
-// were a third of the Cycles quad box's lightmap shading (perf), where most texels see the
-// light.
+// were a third of the Cycles quad box's lightmap shading (`perf record` of `voxlight bake
+// ../shared/reference/cornell_quad.gltf --images false`), where most texels see the light;
+// that lightmap came out the same bytes without them.
 constexpr int kBuriedProbesPerAxis = 4;
 constexpr int kBuriedProbeRays = kBuriedProbesPerAxis * kBuriedProbesPerAxis;
 
@@ -122,9 +123,9 @@ struct ElementLighting {
     vec3 indirectRadiance{0.0f};
 };
 
-// The irradiance at a surface point from n × n cosine-distributed rays (the gather points'
-// fan, bake/ray_gather.h, laid out in the frame `tangent` turned by `turn`), each reading the
-// level-0 texels of `mips` where it hits (hit_texels.h): how a receiver sample that no gather
+// The irradiance at a surface point from n × n cosine-distributed rays (a gather point's fan,
+// fan_rays.h, laid out in the frame `tangent` turned by `turn`), each reading the
+// level-0 texels of `mips` where it hits (fan_rays.h): how a receiver sample that no gather
 // point applies to gathers when the points gathered by rays. Level 0 is all it reads, so the
 // mips need no coarser levels then.
 VL_HOSTDEV inline vec3 rayGatherAtSample(const TraceSceneView& scene, const BvhView& bvh, const MipView& mips,
@@ -132,18 +133,14 @@ VL_HOSTDEV inline vec3 rayGatherAtSample(const TraceSceneView& scene, const BvhV
                                          int raysPerAxis) {
     if (mips.levelCount <= 0 || raysPerAxis <= 0) return vec3(0.0f);
     const Level0Texels level0(mips.levels[0]);
-    const float angle = 2.0f * kPi * turn;
-    const vec3 across = glm::cross(normal, tangent);
-    const vec3 t = glm::cos(angle) * tangent + glm::sin(angle) * across, b = glm::cross(normal, t);
+    const FanFrame frame = fanFrame(normal, tangent, turn);
     Ray ray;
     ray.origin = offsetRayOrigin(position, normal, bvh.extent);
     IndexLeafCache leaves;
     vec3 sum(0.0f);
     for (int i = 0; i < raysPerAxis; ++i)
         for (int j = 0; j < raysPerAxis; ++j) {
-            const vec3 d = sampleCosineHemisphere(
-                vec2((float(i) + 0.5f) / float(raysPerAxis), (float(j) + 0.5f) / float(raysPerAxis)));
-            ray.direction = glm::normalize(d.x * t + d.y * b + d.z * normal);
+            ray.direction = inFrame(frame, fanDirection(i, j, raysPerAxis));
             Hit hit;
             if (!intersectClosest(bvh, ray, hit)) continue;
             readHitTexels(level0, leaves, ray.at(hit.t), ray.direction, windingCross(scene, hit.triangle),

@@ -99,9 +99,7 @@ vec3 layerPosition(const VoxelScene& voxels, const Side* sides, size_t count, in
         (isEnclosed(vec3(surface / double(inQuarter)), vec3(glm::normalize(normal))) ? closed : open) += 1;
     }
     if (open == 0 || closed == 0) return all;
-    std::vector<uint8_t> isOpen(count);
-    for (size_t k = 0; k < count; ++k) isOpen[k] = !isEnclosed(surfacePoint(k), sides[k].normal);
-    const auto [position, taken] = meanCentre([&](size_t k) { return isOpen[k] != 0; });
+    const auto [position, taken] = meanCentre([&](size_t k) { return !isEnclosed(surfacePoint(k), sides[k].normal); });
     return taken > 0 ? position : all;
 }
 

@@ -203,7 +203,7 @@ RadianceMips buildRadianceMips(const VoxelScene& voxels, const std::vector<vec3>
 
 // Level 0 alone: all that the gathers by rays read (a ray reads the voxels it hits, never a
 // coarser level), without the coarser levels' 40% of the mips' time (the quad box at 111
-// voxels). addParentLevels adds them where cones or grids.vdb want them.
+// voxels, timers inside a `voxlight bake`; the lightmap the same bytes). addParentLevels adds them where cones or grids.vdb want them.
 RadianceMips buildLevelZeroMips(const VoxelScene& voxels, const std::vector<vec3>& radiance,
                                 const std::vector<FaceRadiance>& faceRadiance);
 

@@ -1,17 +1,44 @@
-// What a gather ray reads where it hits a surface: the level-0 voxel texels that show the hit
-// surface's side facing back at the ray. Written once for the gathers by rays on the host
-// (ray_gather.cpp, through a flat table of the voxels' coverage) and for a receiver sample no
-// gather point applies to (shade_element.h, through the level's index grid, on the host or a
-// GPU).
+// The rays a gather point sends (its fan) and what each reads where it hits a surface: the
+// level-0 voxel texels that show the hit surface's side facing back at the ray. Written once
+// for the gathers by rays on the host (ray_gather.cpp, through a flat table of the voxels'
+// coverage) and for a receiver sample no gather point applies to (shade_element.h, through
+// the level's index grid, on the host or a GPU).
 #pragma once
 
 #include "cone/radiance_mips.h"
 #include "core/hostdev.h"
 #include "core/math.h"
+#include "core/sampling.h"
 
 #include <cstdint>
 
 namespace vl {
+
+// A fan's frame about its unit normal: `tangent` (unit, ⊥ normal) turned by `turn` of a full
+// turn, and the bitangent that completes it.
+struct FanFrame {
+    vec3 normal, tangent, bitangent;
+};
+
+VL_HOSTDEV inline FanFrame fanFrame(const vec3& normal, const vec3& tangent, float turn) {
+    const float angle = 2.0f * kPi * turn;
+    const vec3 across = glm::cross(normal, tangent);
+    FanFrame frame;
+    frame.normal = normal;
+    frame.tangent = std::cos(angle) * tangent + std::sin(angle) * across;
+    frame.bitangent = glm::cross(normal, frame.tangent);
+    return frame;
+}
+
+// Ray (i, j) of an n × n fan about +Z: cosine-distributed, one per stratum of the square.
+VL_HOSTDEV inline vec3 fanDirection(int i, int j, int n) {
+    return sampleCosineHemisphere(vec2((float(i) + 0.5f) / float(n), (float(j) + 0.5f) / float(n)));
+}
+
+// A fan direction about +Z laid out in `frame`.
+VL_HOSTDEV inline vec3 inFrame(const FanFrame& frame, const vec3& d) {
+    return glm::normalize(d.x * frame.tangent + d.y * frame.bitangent + d.z * frame.normal);
+}
 
 // Along each axis a (weight n_a², normalised over the axes read), the level-0 texel that shows
 // the face of the hit surface's side that looks back at the ray (radiance_mips.h: the texel of
