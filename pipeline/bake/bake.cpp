@@ -315,8 +315,15 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
             if (!split.patches.empty()) {
                 std::vector<vec3> irradiance = cache.irradiance();
                 const float h = static_cast<float>(result.voxels.voxelSize);
-                addBrightPatchIrradiance(cache.points(), split.patches, bvhView, settings.cone.startOffset * h, h,
-                                         irradiance);
+                std::vector<vec3> origins;  // where each point's gather starts
+                if (byRays) {
+                    origins = fanOrigins(cache.points(), h, bvhView, sceneView);
+                } else {
+                    origins.reserve(cache.points().size());  // the cones' apex
+                    for (const GatherPoint& point : cache.points())
+                        origins.push_back(point.position + point.normal * (settings.cone.startOffset * h));
+                }
+                addBrightPatchIrradiance(cache.points(), origins, split.patches, bvhView, h, irradiance);
                 cache.setIrradiance(std::move(irradiance));
             }
             if (relight) result.mips.relight(result.voxels, result.voxels.radiance, result.voxels.faceRadiance);

@@ -1,5 +1,7 @@
 #include "bake/bright_patches.h"
 
+#include "core/error.h"
+
 #include "core/polygon_irradiance.h"
 #include "trace/bvh_traverse.h"
 
@@ -123,9 +125,14 @@ BrightPatchSplit splitBrightPatches(const VoxelScene& voxels, const BrightPatchS
     return split;
 }
 
-void addBrightPatchIrradiance(const std::vector<GatherPoint>& points, const std::vector<BrightPatch>& patches,
-                              const BvhView& bvh, float lift, float voxelSize, std::vector<vec3>& irradiance) {
+void addBrightPatchIrradiance(const std::vector<GatherPoint>& points, const std::vector<vec3>& origins,
+                              const std::vector<BrightPatch>& patches, const BvhView& bvh, float voxelSize,
+                              std::vector<vec3>& irradiance) {
     if (patches.empty()) return;
+    if (origins.size() != points.size() || irradiance.size() != points.size())
+        throw Error("addBrightPatchIrradiance: " + std::to_string(origins.size()) + " origins and " +
+                    std::to_string(irradiance.size()) + " irradiance values for " + std::to_string(points.size()) +
+                    " gather points");
     // Each patch as a square of its area across its normal: Lambert's polygon formula is exact
     // for it at any distance, where L·A·cos·cos/r² overshoots near it. Its half edges u, v
     // follow the two axes after the normal's main one, laid into its plane (exactly those axes
@@ -143,7 +150,7 @@ void addBrightPatchIrradiance(const std::vector<GatherPoint>& points, const std:
     tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
         for (size_t k = range.begin(); k != range.end(); ++k) {
             const GatherPoint& point = points[k];
-            const vec3 origin = point.position + point.normal * lift;
+            const vec3& origin = origins[k];
             vec3 E(0.0f);
             for (size_t p = 0; p < patches.size(); ++p) {
                 const BrightPatch& patch = patches[p];

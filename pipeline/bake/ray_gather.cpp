@@ -308,6 +308,11 @@ std::vector<T> perFan(const std::vector<GatherPoint>& points, float voxelSize, c
 
 }  // namespace
 
+std::vector<vec3> fanOrigins(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
+                             const TraceSceneView& scene) {
+    return perFan<vec3>(points, voxelSize, bvh, scene, [](size_t, const RayFan& fan) { return fan.origin; });
+}
+
 std::vector<float> skyOpenness(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
                                const TraceSceneView& scene, int raysPerAxis) {
     checkRays(raysPerAxis);

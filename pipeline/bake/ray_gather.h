@@ -84,6 +84,11 @@ FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView
                            const BvhView& bvh, const TraceSceneView& scene, int raysPerAxis, int skyDrawsPerAxis = 0,
                            Progress* progress = nullptr);
 
+// Per point, where its rays start (the surface under it, as gatherByRays finds it): where the
+// final gather adds its bright patches' light from (bake/bright_patches.h).
+std::vector<vec3> fanOrigins(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
+                             const TraceSceneView& scene);
+
 // Per point, the weight of its rays (raysPerAxis² as gatherByRays sends them) that leave the
 // scene: irradiance per unit radiance of a uniform sky, π where nothing blocks it
 // (FaceTransport::open, for the bounces when they gather by cones).

@@ -190,6 +190,7 @@ IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level, const Encl
         // Side normals of one class all lean the same way, so the sum is far from zero.
         point.normal = length > 0.0 ? vec3(normal / length) : sides[begin].normal;
         gatherFrame(point.position, point.normal, centre, cellSize, point.tangent, point.turn);
+        point.mass = std::sqrt(std::min(1.0f, float(count) / float(uint64_t(1) << (2 * level))));
     });
     nanovdb::GridBuilder<int32_t> builder(-1);
     builder.setStats(nanovdb::StatsMode::BBox);  // the index needs no value statistics

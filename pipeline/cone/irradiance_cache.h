@@ -20,14 +20,34 @@
 // Interpolation at a surface point p with unit normal n: every gather point q (normal n_q)
 // of the 3 × 3 × 3 cells around p's cell that p can see (clearPath, tested once per
 // receiver through its home point: visitCachePoints) weighs
-//   w_q = Π_axes max(0, 1 − |p_a − q_a| / H) · max(0, n·n_q) · max(0, 1 − |(p − q)·n_q| / H),
+//   w_q = m_q · Π_axes max(0, 1 − |p_a − q_a| / H) · max(0, n·n_q) · max(0, 1 − |(p − q)·n_q| / H),
 // H = 2^L·h: a tent one cell wide, facing the same way as p, lying in p's plane (the far
 // side of a thin wall faces away; a shelf over a floor lies in another plane), and the
-// irradiance is Σ w_q E_q / Σ w_q. Why the visibility test: two rooms' floors in one plane,
-// a wall between them, face the same way, and the dark room's floor by the wall took light
-// from the lit room's floor points (3.9% of the lit room's mean across a wall one voxel
-// thick). Where no point applies (p by a wall it cannot see past, an isolated sliver) the
-// caller gathers cones at p itself, so every receiver gets light.
+// irradiance is Σ w_q E_q / Σ w_q. m_q, the point's mass, is √(its layer's share of the
+// cell's cross-section): its voxels over 4^L, at most 1. Why: where a wall ends a surface
+// inside a cell, the layer there is a strip 1 to 8 voxels wide, and with equal masses the
+// strip's point stood for half a cell of surface beside it whatever its width. A strip one
+// voxel wide put the darker irradiance of the corner over the voxels beside it, one 8 wide
+// carried the brighter irradiance of its middle into the corner: a closed white box's
+// indirect power was 0.917 of Φρ/(1 − ρ) with its walls in the first voxel of their cells and
+// 1.022 with them in the last; with masses 0.968–1.020 over all eight alignments
+// (tests/bake/bake_test.cpp "A closed white box's indirect power*"). Sixteen turns of the
+// Cycles boxes, which cut cells at every slant, went from lightmap errors of 2.45–2.98% /
+// 2.54–3.00% (quad / point, mean 2.63% / 2.73%) to 2.38–2.96% / 2.44–2.95% (2.52% / 2.55%;
+// build/accuracy/accuracy_rotations, 2026-11-27). Why the square root: the share itself
+// (m = share) holds the white box at 0.998–1.020, but a point then carries its irradiance
+// into the corners beyond it at full weight, and the bright rooms of scenes/two_rooms.gltf
+// come out 2.1% too bright against the path tracer (9 bounces, build/accuracy/accuracy_bounces)
+// where they were 1.6% (with √: 1.9%), their lightmap 3.9% from it against 3.3% (3.6%), and
+// the turned boxes' worst turn 3.01% / 3.02%. A slanted layer holds more voxels than a flat
+// one of the same extent; its share stays 1 (by its voxels' true area instead, the worst
+// turn was 3.17%).
+//
+// Why the visibility test: two rooms' floors in one plane, a wall between them, face the
+// same way, and the dark room's floor by the wall took light from the lit room's floor points
+// (3.9% of the lit room's mean across a wall one voxel thick). Where no point applies (p by a
+// wall it cannot see past, an isolated sliver) the caller gathers cones at p itself, so every
+// receiver gets light.
 #pragma once
 
 #include "cone/cone_trace.h"
@@ -52,6 +72,7 @@ struct GatherPoint {
     // normal from it (see gatherFrame).
     vec3 tangent{1.0f, 0.0f, 0.0f};
     float turn = 0.0f;
+    float mass = 1.0f;  // in (0, 1]: √(the share of its cell's cross-section its layer covers)
 };
 
 constexpr int kMaxGatherTurns = 16;
@@ -185,7 +206,7 @@ VL_HOSTDEV inline float cacheWeight(const GatherPoint& q, const vec3& p, const v
     if (!(facing > 0.0f)) return 0.0f;
     float w = facing * glm::max(0.0f, 1.0f - glm::abs(glm::dot(d, q.normal)) * inverseCell);
     for (int a = 0; a < 3; ++a) w *= tent[a];
-    return w;
+    return w * q.mass;
 }
 
 // Calls visit(point index, weight) for every point with weight > 0 at (p, n) that p sees;

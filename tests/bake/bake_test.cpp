@@ -254,19 +254,19 @@ TEST_CASE("A texel where a wall meets the floor or ceiling gets the indirect lig
     }
 }
 
-TEST_CASE("A closed white box's indirect power stays within the mip alignment error of energy conservation",
+TEST_CASE("A closed white box's indirect power holds energy conservation at every alignment of its walls in the cells",
           "[bake]") {
     // Energy conservation: the emitted power Φ bounces with albedo ρ, so Σ over surfaces of
     // E_indirect·A is Φ·ρ/(1−ρ) when every bounce reaches some surface (the emitter's black
     // back takes a little: the exact value lies just under). E/π per texel, area-weighted.
-    // A cone reads walls through the mip hierarchy, and what a coarse voxel holds depends on
-    // where the wall falls inside it: with 47 voxels across this box the walls sit in the
-    // last voxel of their level-3 cells, with 49 in the first. Measured (2026-11-24), the
-    // indirect power is then 1.022 and 0.917 of the exact value gathering by rays (by cones
-    // 1.058 and 0.879; a single gather: +4% / −4%), their mean 0.970: the bounces, which read
-    // the gather points' irradiance over the cells, do create energy at one alignment. The
-    // bounds are those measurements with 2–3 points to spare, so that a change which widens
-    // the alignment error, or tilts both alignments brighter (the mean above exact), fails;
+    // The box is centred on a voxel corner, so with N = 41, 43, … 55 voxels across it its walls
+    // fall in each of the 8 voxels of their level-3 gather cells in turn, and each surface ends
+    // inside a cell in a strip 1 to 8 voxels wide. Measured (2026-11-27): the series 0.968–1.020
+    // of the exact value, the first gather alone 1.002–1.022 of Φρ. Before the points weighed by
+    // the surface they stand for (irradiance_cache.h, the points' mass) the series was 0.917
+    // (strip 1 voxel wide, N = 49) to 1.022 (8 wide, N = 47), and with 32² texels a face over
+    // all eight 0.916–1.023, the first gather 0.987–1.026: the bounces created or lost energy
+    // by where the walls sat. The bounds are the measurements with a point or two to spare;
     // they are not a derived limit.
     Scene scene;
     scene.sourcePath = "white box (test)";
@@ -279,25 +279,32 @@ TEST_CASE("A closed white box's indirect power stays within the mip alignment er
             vec3(0.4f, 0.99f, 0.6f));
     scene.meshes.back().uv1.clear();  // emitters are not baked
     const double emitted = kPi * 0.2 * 0.2;  // exitance π·L over 0.04 m²
-    const double exact = emitted * rho / (1.0 - rho);
-    double sumOverAlignments = 0.0;
-    for (int resolution : {47, 49}) {
-        BakeSettings settings = quietSettings();
-        settings.voxel.resolution = resolution;
-        settings.lightmap.atlasPerMesh = true;
-        settings.lightmap.width = settings.lightmap.height = 16;
-        settings.bounces = 8;
-        Diagnostics diagnostics(false, false);
-        const BakeResult result = bake(scene, settings, diagnostics);
-        double indirectPower = 0.0;  // Σ_faces mean(E/π)·π·area, every face 1 m²
-        for (const BakedLightmap& l : result.lightmaps) indirectPower += coveredMean(l, &l.indirect) * kPi;
-        INFO(resolution << " voxels: indirect power " << indirectPower << " W, exact " << exact << " W");
-        CHECK(indirectPower > 0.85 * exact);
-        CHECK(indirectPower < 1.08 * exact);
-        sumOverAlignments += indirectPower;
-    }
-    INFO("mean over the two alignments " << sumOverAlignments / 2.0 << " W, exact " << exact << " W");
-    CHECK(sumOverAlignments / 2.0 <= exact);
+    double lowest[2] = {1e9, 1e9}, highest[2] = {0.0, 0.0};
+    for (int resolution = 41; resolution <= 55; resolution += 2)
+        for (int bounces : {0, 8}) {
+            BakeSettings settings = quietSettings();
+            settings.voxel.resolution = resolution;
+            settings.lightmap.atlasPerMesh = true;
+            settings.lightmap.width = settings.lightmap.height = 16;
+            settings.bounces = bounces;
+            settings.bounceTail = bounces > 1;
+            Diagnostics diagnostics(false, false);
+            const BakeResult result = bake(scene, settings, diagnostics);
+            double indirectPower = 0.0;  // Σ_faces mean(E/π)·π·area, every face 1 m²
+            for (const BakedLightmap& l : result.lightmaps) indirectPower += coveredMean(l, &l.indirect) * kPi;
+            const double exact = bounces == 0 ? emitted * rho : emitted * rho / (1.0 - rho);
+            const double ratio = indirectPower / exact;
+            WARN(resolution << " voxels, " << bounces << " bounces: indirect power " << ratio << " of exact");
+            const int k = bounces == 0 ? 0 : 1;
+            lowest[k] = std::min(lowest[k], ratio);
+            highest[k] = std::max(highest[k], ratio);
+        }
+    INFO("first gather " << lowest[0] << " … " << highest[0] << ", series " << lowest[1] << " … " << highest[1]);
+    CHECK(lowest[0] > 0.99);
+    CHECK(highest[0] < 1.04);
+    CHECK(lowest[1] > 0.95);
+    CHECK(highest[1] < 1.04);
+    CHECK(highest[1] - lowest[1] < 0.07);
 }
 
 TEST_CASE("A closed white box turned to any orientation keeps its indirect power", "[bake]") {

@@ -135,7 +135,7 @@ TEST_CASE("A bright patch gives a gather point L A cos cos / r^2 far off, pi L c
         const SceneTriangles triangles = gatherTriangles(scene);
         const Bvh bvh = Bvh::build(triangles);
         std::vector<vec3> irradiance(1, vec3(1.0f));
-        addBrightPatchIrradiance({point}, {patch}, bvh.view(), lift, h, irradiance);
+        addBrightPatchIrradiance({point}, {point.position + point.normal * lift}, {patch}, bvh.view(), h, irradiance);
         return irradiance[0] - vec3(1.0f);
     };
     // A small triangle far off the path, so the BVH is not empty.
