@@ -30,16 +30,17 @@
 // voxel wide put the darker irradiance of the corner over the voxels beside it, one 8 wide
 // carried the brighter irradiance of its middle into the corner: a closed white box's
 // indirect power was 0.917 of Φρ/(1 − ρ) with its walls in the first voxel of their cells and
-// 1.022 with them in the last; with masses 0.968–1.020 over all eight alignments
+// 1.022 with them in the last; with masses 0.961–1.012 over all eight alignments
 // (tests/bake/bake_test.cpp "A closed white box's indirect power*"). Sixteen turns of the
 // Cycles boxes, which cut cells at every slant, went from lightmap errors of 2.45–2.98% /
 // 2.54–3.00% (quad / point, mean 2.63% / 2.73%) to 2.38–2.96% / 2.44–2.95% (2.52% / 2.55%;
-// build/accuracy/accuracy_rotations, 2026-11-27). Why the square root: the share itself
-// (m = share) holds the white box at 0.998–1.020, but a point then carries its irradiance
-// into the corners beyond it at full weight, and the bright rooms of scenes/two_rooms.gltf
-// come out 2.1% too bright against the path tracer (9 bounces, build/accuracy/accuracy_bounces)
-// where they were 1.6% (with √: 1.9%), their lightmap 3.9% from it against 3.3% (3.6%), and
-// the turned boxes' worst turn 3.01% / 3.02%. A slanted layer holds more voxels than a flat
+// build/accuracy/accuracy_rotations, 2026-11-27, with the fans' stratum middles: fan_rays.h).
+// Why the square root: the share itself (m = share) holds the white box at 0.998–1.020, but a
+// point then carries its irradiance into the corners beyond it at full weight, and the bright
+// rooms of scenes/two_rooms.gltf came out 2.1% too bright against the path tracer (9 bounces,
+// build/accuracy/accuracy_bounces) where they were 1.6% (with √: 1.9%), their lightmap 3.9%
+// from it against 3.3% (3.6%), and the turned boxes' worst turn 3.01% / 3.02% (the same
+// stratum middles). A slanted layer holds more voxels than a flat
 // one of the same extent; its share stays 1 (by its voxels' true area instead, the worst
 // turn was 3.17%).
 //

@@ -261,8 +261,8 @@ TEST_CASE("A closed white box's indirect power holds energy conservation at ever
     // back takes a little: the exact value lies just under). E/π per texel, area-weighted.
     // The box is centred on a voxel corner, so with N = 41, 43, … 55 voxels across it its walls
     // fall in each of the 8 voxels of their level-3 gather cells in turn, and each surface ends
-    // inside a cell in a strip 1 to 8 voxels wide. Measured (2026-11-27): the series 0.968–1.020
-    // of the exact value, the first gather alone 1.002–1.022 of Φρ. Before the points weighed by
+    // inside a cell in a strip 1 to 8 voxels wide. Measured (2026-11-27): the series 0.961–1.012
+    // of the exact value, the first gather alone 0.997–1.016 of Φρ. Before the points weighed by
     // the surface they stand for (irradiance_cache.h, the points' mass) the series was 0.917
     // (strip 1 voxel wide, N = 49) to 1.022 (8 wide, N = 47), and with 32² texels a face over
     // all eight 0.916–1.023, the first gather 0.987–1.026: the bounces created or lost energy
