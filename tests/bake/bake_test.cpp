@@ -254,6 +254,40 @@ TEST_CASE("A texel where a wall meets the floor or ceiling gets the indirect lig
     }
 }
 
+// A closed 1 m white box of albedo ρ (its six faces lightmapped per mesh) with a 0.2 m square
+// emitter of radiance 1 facing down 1 cm under the ceiling, which is not baked.
+constexpr float kWhiteBoxAlbedo = 0.7f;
+constexpr double kWhiteBoxEmitted = kPi * 0.2 * 0.2;  // exitance π·L over 0.04 m²
+Scene whiteBox(bool doubleSided = false) {
+    Scene scene;
+    scene.sourcePath = "white box (test)";
+    const int white = addLambert(scene, vec3(kWhiteBoxAlbedo));
+    scene.materials[size_t(white)].doubleSided = doubleSided;
+    const int lamp = addLambert(scene, vec3(0.0f), vec3(1.0f));
+    addRoom(scene, "box/", white, vec3(0.0f), vec3(1.0f));
+    addQuad(scene, "lamp", lamp, vec3(0.4f, 0.99f, 0.4f), vec3(0.6f, 0.99f, 0.4f), vec3(0.6f, 0.99f, 0.6f),
+            vec3(0.4f, 0.99f, 0.6f));
+    scene.meshes.back().uv1.clear();  // emitters are not baked
+    return scene;
+}
+
+// The indirect power a white box's lightmaps hold over what energy conservation gives it: Φρ
+// for the first gather alone (bounces 0), Φρ/(1−ρ) for the whole series (with its tail).
+double whiteBoxIndirectPowerRatio(const Scene& scene, int resolution, int lightmapSize, int bounces) {
+    BakeSettings settings = quietSettings();
+    settings.voxel.resolution = resolution;
+    settings.lightmap.atlasPerMesh = true;
+    settings.lightmap.width = settings.lightmap.height = lightmapSize;
+    settings.bounces = bounces;
+    settings.bounceTail = bounces > 1;
+    Diagnostics diagnostics(false, false);
+    const BakeResult result = bake(scene, settings, diagnostics);
+    double indirectPower = 0.0;  // Σ_faces mean(E/π)·π·area, every face 1 m²
+    for (const BakedLightmap& l : result.lightmaps) indirectPower += coveredMean(l, &l.indirect) * kPi;
+    const double rho = kWhiteBoxAlbedo;
+    return indirectPower / (bounces == 0 ? kWhiteBoxEmitted * rho : kWhiteBoxEmitted * rho / (1.0 - rho));
+}
+
 TEST_CASE("A closed white box's indirect power holds energy conservation at every alignment of its walls in the cells",
           "[bake]") {
     // Energy conservation: the emitted power Φ bounces with albedo ρ, so Σ over surfaces of
@@ -268,32 +302,11 @@ TEST_CASE("A closed white box's indirect power holds energy conservation at ever
     // all eight 0.916–1.023, the first gather 0.987–1.026: the bounces created or lost energy
     // by where the walls sat. The bounds are the measurements with a point or two to spare;
     // they are not a derived limit.
-    Scene scene;
-    scene.sourcePath = "white box (test)";
-    constexpr float rho = 0.7f;
-    const int white = addLambert(scene, vec3(rho));
-    const int lamp = addLambert(scene, vec3(0.0f), vec3(1.0f));
-    addRoom(scene, "box/", white, vec3(0.0f), vec3(1.0f));
-    // A 0.2 m square emitter facing down just under the ceiling, radiance 1 (exitance π).
-    addQuad(scene, "lamp", lamp, vec3(0.4f, 0.99f, 0.4f), vec3(0.6f, 0.99f, 0.4f), vec3(0.6f, 0.99f, 0.6f),
-            vec3(0.4f, 0.99f, 0.6f));
-    scene.meshes.back().uv1.clear();  // emitters are not baked
-    const double emitted = kPi * 0.2 * 0.2;  // exitance π·L over 0.04 m²
+    const Scene scene = whiteBox();
     double lowest[2] = {1e9, 1e9}, highest[2] = {0.0, 0.0};
     for (int resolution = 41; resolution <= 55; resolution += 2)
         for (int bounces : {0, 8}) {
-            BakeSettings settings = quietSettings();
-            settings.voxel.resolution = resolution;
-            settings.lightmap.atlasPerMesh = true;
-            settings.lightmap.width = settings.lightmap.height = 16;
-            settings.bounces = bounces;
-            settings.bounceTail = bounces > 1;
-            Diagnostics diagnostics(false, false);
-            const BakeResult result = bake(scene, settings, diagnostics);
-            double indirectPower = 0.0;  // Σ_faces mean(E/π)·π·area, every face 1 m²
-            for (const BakedLightmap& l : result.lightmaps) indirectPower += coveredMean(l, &l.indirect) * kPi;
-            const double exact = bounces == 0 ? emitted * rho : emitted * rho / (1.0 - rho);
-            const double ratio = indirectPower / exact;
+            const double ratio = whiteBoxIndirectPowerRatio(scene, resolution, 16, bounces);
             WARN(resolution << " voxels, " << bounces << " bounces: indirect power " << ratio << " of exact");
             const int k = bounces == 0 ? 0 : 1;
             lowest[k] = std::min(lowest[k], ratio);
@@ -311,7 +324,9 @@ TEST_CASE("A closed white box turned to any orientation keeps its indirect power
     // The same room as above, turned as a whole: every surface now crosses the voxel axes at
     // a slant. Light does not care how a room is turned, so the first gather must still hold
     // Φρ (all light reflected once lands on some wall) and the whole series Φρ/(1−ρ). The
-    // bounds are the ones the axis-aligned room is held to at its two grid alignments.
+    // bounds, 0.85–1.08, are the ones the axis-aligned room was held to at two of its grid
+    // alignments before the gather points weighed by the surface they stand for; measured
+    // since (2026-11-27) 97.6–101.0% single-sided and 94.9–99.7% double-sided.
     // Before the mips closed slanted walls (radiance_mips.cpp makeParent) and the voxels
     // were lit by Lambert's cosine on their side's normal, the 30° turn about Y kept 72 % of
     // the first gather and 55 % of the series, and four random turns of the same room 59–76 %
@@ -321,8 +336,6 @@ TEST_CASE("A closed white box turned to any orientation keeps its indirect power
     // same turns kept 61–77 %. Double-sided walls, whose voxels hold both sides: 95–98 % at
     // 30–60° turns; when a ray read each axis's face by its own travel, it read a tilted
     // wall's unlit side along the axes it glanced over, and kept 59–77 %.
-    constexpr float rho = 0.7f;
-    const double emitted = kPi * 0.2 * 0.2;
     const glm::quat turns[] = {
         glm::angleAxis(glm::radians(30.0f), vec3(0.0f, 1.0f, 0.0f)),
         glm::angleAxis(glm::radians(45.0f), glm::normalize(vec3(1.0f, 1.0f, 0.0f))),
@@ -331,36 +344,19 @@ TEST_CASE("A closed white box turned to any orientation keeps its indirect power
     };
     for (const auto& [turn, doubleSided] : {std::pair{turns[0], false}, std::pair{turns[1], false}, std::pair{turns[2], false},
                                             std::pair{turns[3], false}, std::pair{turns[0], true}, std::pair{turns[2], true}}) {
-        Scene scene;
+        Scene scene = whiteBox(doubleSided);
         scene.sourcePath = "turned white box (test)";
-        const int white = addLambert(scene, vec3(rho));
-        scene.materials[size_t(white)].doubleSided = doubleSided;
-        const int lamp = addLambert(scene, vec3(0.0f), vec3(1.0f));
-        addRoom(scene, "box/", white, vec3(0.0f), vec3(1.0f));
-        addQuad(scene, "lamp", lamp, vec3(0.4f, 0.99f, 0.4f), vec3(0.6f, 0.99f, 0.4f), vec3(0.6f, 0.99f, 0.6f),
-                vec3(0.4f, 0.99f, 0.6f));
-        scene.meshes.back().uv1.clear();
         for (Mesh& mesh : scene.meshes) {
             for (vec3& p : mesh.positions) p = turn * (p - vec3(0.5f));
             for (vec3& n : mesh.normals) n = turn * n;
         }
         for (int bounces : {0, 8}) {
-            BakeSettings settings = quietSettings();
-            settings.voxel.resolution = 64;
-            settings.lightmap.atlasPerMesh = true;
-            settings.lightmap.width = settings.lightmap.height = 32;
-            settings.bounces = bounces;
-            settings.bounceTail = bounces > 1;
-            Diagnostics diagnostics(false, false);
-            const BakeResult result = bake(scene, settings, diagnostics);
-            double indirectPower = 0.0;
-            for (const BakedLightmap& l : result.lightmaps) indirectPower += coveredMean(l, &l.indirect) * kPi;
-            const double exact = bounces == 0 ? emitted * rho : emitted * rho / (1.0 - rho);
+            const double ratio = whiteBoxIndirectPowerRatio(scene, 64, 32, bounces);
             INFO("turn (" << turn.w << ", " << turn.x << ", " << turn.y << ", " << turn.z << "), "
                           << (doubleSided ? "double-sided, " : "") << bounces << " bounces: indirect power "
-                          << indirectPower << " W, exact " << exact << " W");
-            CHECK(indirectPower > 0.85 * exact);
-            CHECK(indirectPower < 1.08 * exact);
+                          << ratio << " of exact");
+            CHECK(ratio > 0.85);
+            CHECK(ratio < 1.08);
         }
     }
 }
