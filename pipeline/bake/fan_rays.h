@@ -53,10 +53,12 @@ VL_HOSTDEV inline vec3 fanDirection(int i, int j, int n) {
             elevation += glm::asin(r);
             if (r > 0.0f) azimuth += d / r;
         }
-    elevation /= float(kFanStratumSamples * kFanStratumSamples);
+    // The stratum around the disk's centre (n odd) has no mean azimuth: its samples' cancel to
+    // rounding, and its ray is the normal.
     const float length = glm::length(azimuth);
-    const vec2 u = length > 0.0f ? azimuth / length : vec2(1.0f, 0.0f);
-    return vec3(u * glm::sin(elevation), glm::cos(elevation));
+    if (!(length > 0.5f)) return vec3(0.0f, 0.0f, 1.0f);
+    elevation /= float(kFanStratumSamples * kFanStratumSamples);
+    return vec3(azimuth / length * glm::sin(elevation), glm::cos(elevation));
 }
 
 // A fan direction about +Z laid out in `frame`.

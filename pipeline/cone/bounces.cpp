@@ -89,9 +89,10 @@ Value sideValue(const SideWeights& weights, size_t slot, AtPoint&& atPoint, AtSe
 }
 
 // A side's home (visitCachePoints) is the point of its own layer (IrradianceCache::sidePoints)
-// where the side sees it and takes weight from it, as the receivers' search mostly finds,
-// without that search's ranking of its cell's points (the search still serves the rest): the Cornell quad box's bounces stage went from about 0.11 to 0.095 s
-// at 111 voxels (bake.json, fastest of 5). Taken without the path test too (0.088 s), a
+// where the side sees it and takes weight from it, which the receivers' search, ranking its
+// cell's points by their geometric weight, mostly finds too; without that search (it still
+// serves the rest) the Cornell quad box's bounces stage went from about 0.11 to 0.095 s at
+// 111 voxels (bake.json, fastest of 5). Taken without the path test too (0.088 s), a
 // turned box's lightmap lost 0.1 point (accuracy_rotations: 3.06% at worst, 2.97% with it).
 SideWeights sideWeights(const VoxelScene& voxels, const IrradianceCacheView& cache, const std::vector<uint32_t>& sidePoints) {
     if (sidePoints.size() != voxels.size() * 6)

@@ -54,8 +54,25 @@ void IrradianceCache::checkLevel(int level) {
 namespace {
 
 // Where a layer's point sits: the mean centre of its voxels, or, with a probe, of those whose
-// surface is open (IrradianceCache's constructor says why and how).
-vec3 layerPosition(const VoxelScene& voxels, const Side* sides, size_t count, int level, const EnclosedProbe* enclosed) {
+// surface is open (IrradianceCache's constructor says why and how); and the mass it takes
+// (IrradianceCache.h): √ of the share of the cell's cross-section those voxels cover, counted
+// by their distinct columns across the layer's axis, so that a layer two voxels deep (a plane
+// on a voxel boundary) or a slanted one counts each column once.
+vec3 layerPosition(const VoxelScene& voxels, const Side* sides, size_t count, int level, const EnclosedProbe* enclosed,
+                   float& mass) {
+    const int axis = sides[0].faceClass / 2, u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const auto massOf = [&](auto&& take) {
+        std::vector<uint64_t> columns;
+        columns.reserve(count);
+        for (size_t k = 0; k < count; ++k)
+            if (take(k)) {
+                const ivec3& c = voxels.coords[sides[k].voxel];
+                columns.push_back(uint64_t(uint32_t(c[u])) << 32 | uint32_t(c[v]));
+            }
+        std::sort(columns.begin(), columns.end());
+        const size_t distinct = size_t(std::unique(columns.begin(), columns.end()) - columns.begin());
+        return std::sqrt(std::min(1.0f, float(distinct) / float(uint64_t(1) << (2 * level))));
+    };
     const auto meanCentre = [&](auto&& take) {
         glm::dvec3 sum(0.0);
         size_t taken = 0;
@@ -67,6 +84,7 @@ vec3 layerPosition(const VoxelScene& voxels, const Side* sides, size_t count, in
         return std::make_pair(vec3(sum / double(std::max<size_t>(taken, 1))), taken);
     };
     const vec3 all = meanCentre([](size_t) { return true; }).first;
+    mass = massOf([](size_t) { return true; });
     if (!enclosed || level < 1) return all;
     const float h = static_cast<float>(voxels.voxelSize);
     const bool offsets = voxels.surfaceOffset.size() == voxels.size();
@@ -80,7 +98,6 @@ vec3 layerPosition(const VoxelScene& voxels, const Side* sides, size_t count, in
     // The quarters of the cell in the layer's plane, each probed at the mean of its surface
     // points facing the mean of its normals: nothing in it depends on the voxels' order, so a
     // quarter turn of the scene probes the same places.
-    const int axis = sides[0].faceClass / 2, u = (axis + 1) % 3, v = (axis + 2) % 3;
     const auto quarter = [&](size_t k) {
         const ivec3& c = voxels.coords[sides[k].voxel];
         return ((c[u] >> (level - 1)) & 1) | (((c[v] >> (level - 1)) & 1) << 1);
@@ -99,8 +116,12 @@ vec3 layerPosition(const VoxelScene& voxels, const Side* sides, size_t count, in
         (isEnclosed(vec3(surface / double(inQuarter)), vec3(glm::normalize(normal))) ? closed : open) += 1;
     }
     if (open == 0 || closed == 0) return all;
-    const auto [position, taken] = meanCentre([&](size_t k) { return !isEnclosed(surfacePoint(k), sides[k].normal); });
-    return taken > 0 ? position : all;
+    std::vector<char> isOpen(count);
+    for (size_t k = 0; k < count; ++k) isOpen[k] = !isEnclosed(surfacePoint(k), sides[k].normal);
+    const auto [position, taken] = meanCentre([&](size_t k) { return isOpen[k] != 0; });
+    if (taken == 0) return all;
+    mass = massOf([&](size_t k) { return isOpen[k] != 0; });
+    return position;
 }
 
 }  // namespace
@@ -185,12 +206,11 @@ IrradianceCache::IrradianceCache(const VoxelScene& voxels, int level, const Encl
         glm::dvec3 normal(0.0);
         for (size_t k = begin; k < begin + count; ++k) normal += glm::dvec3(sides[k].normal);
         GatherPoint& point = points_[p];
-        point.position = layerPosition(voxels, &sides[begin], count, level, crossed(p) ? enclosed : nullptr);
+        point.position = layerPosition(voxels, &sides[begin], count, level, crossed(p) ? enclosed : nullptr, point.mass);
         const double length = glm::length(normal);
         // Side normals of one class all lean the same way, so the sum is far from zero.
         point.normal = length > 0.0 ? vec3(normal / length) : sides[begin].normal;
         gatherFrame(point.position, point.normal, centre, cellSize, point.tangent, point.turn);
-        point.mass = std::sqrt(std::min(1.0f, float(count) / float(uint64_t(1) << (2 * level))));
     });
     nanovdb::GridBuilder<int32_t> builder(-1);
     builder.setStats(nanovdb::StatsMode::BBox);  // the index needs no value statistics

@@ -24,25 +24,26 @@
 // H = 2^L·h: a tent one cell wide, facing the same way as p, lying in p's plane (the far
 // side of a thin wall faces away; a shelf over a floor lies in another plane), and the
 // irradiance is Σ w_q E_q / Σ w_q. m_q, the point's mass, is √(its layer's share of the
-// cell's cross-section): its voxels over 4^L, at most 1. Why: where a wall ends a surface
-// inside a cell, the layer there is a strip 1 to 8 voxels wide, and with equal masses the
-// strip's point stood for half a cell of surface beside it whatever its width. A strip one
-// voxel wide put the darker irradiance of the corner over the voxels beside it, one 8 wide
-// carried the brighter irradiance of its middle into the corner: a closed white box's
-// indirect power was 0.917 of Φρ/(1 − ρ) with its walls in the first voxel of their cells and
-// 1.022 with them in the last; with masses 0.961–1.012 over all eight alignments
-// (tests/bake/bake_test.cpp "A closed white box's indirect power*"). Sixteen turns of the
-// Cycles boxes, which cut cells at every slant, went from lightmap errors of 2.45–2.98% /
-// 2.54–3.00% (quad / point, mean 2.63% / 2.73%) to 2.38–2.96% / 2.44–2.95% (2.52% / 2.55%;
-// build/accuracy/accuracy_rotations, 2026-11-27, with the fans' stratum middles: fan_rays.h).
-// Why the square root: the share itself (m = share) holds the white box at 0.998–1.020, but a
-// point then carries its irradiance into the corners beyond it at full weight, and the bright
-// rooms of scenes/two_rooms.gltf came out 2.1% too bright against the path tracer (9 bounces,
+// cell's cross-section): the distinct columns across the layer's axis that its open voxels
+// fill, over 4^L (a layer two voxels deep, or slanted, counts each column once; voxels under a
+// block, which the point leaves out, are not counted). Why: where a wall ends a surface inside
+// a cell, the layer there is a strip 1 to 8 voxels wide, and with equal masses the strip's
+// point stood for half a cell of surface beside it whatever its width. A strip one voxel wide
+// put the darker irradiance of the corner over the voxels beside it, one 8 wide carried the
+// brighter irradiance of its middle into the corner: a closed white box's indirect power was
+// 0.917 of Φρ/(1 − ρ) with its walls in the first voxel of their cells and 1.022 with them in
+// the last; with masses 0.961–1.012 over all eight alignments (tests/bake/bake_test.cpp "A
+// closed white box's indirect power*"). Sixteen turns of the Cycles boxes, which cut cells at
+// every slant, went from lightmap errors of 2.45–2.98% / 2.54–3.00% (quad / point, mean 2.63%
+// / 2.73%) to 2.41–2.84% / 2.50–2.85% (2.53% / 2.60%; build/accuracy/accuracy_rotations,
+// 2026-11-27); counting every voxel of a layer instead of its open columns, 2.40–3.00% /
+// 2.51–3.02%. Why the square root (measured with the fans' stratum middles, fan_rays.h, and
+// every voxel counted): the share itself holds the white box at 0.998–1.020, but a point then
+// carries its irradiance into the corners beyond it at full weight, and the bright rooms of
+// scenes/two_rooms.gltf came out 2.1% too bright against the path tracer (9 bounces,
 // build/accuracy/accuracy_bounces) where they were 1.6% (with √: 1.9%), their lightmap 3.9%
-// from it against 3.3% (3.6%), and the turned boxes' worst turn 3.01% / 3.02% (the same
-// stratum middles). A slanted layer holds more voxels than a flat
-// one of the same extent; its share stays 1 (by its voxels' true area instead, the worst
-// turn was 3.17%).
+// from it against 3.3% (3.6%), and the turned boxes' worst turn 3.01% / 3.02% (with √: 2.96%
+// / 2.95%).
 //
 // Why the visibility test: two rooms' floors in one plane, a wall between them, face the
 // same way, and the dark room's floor by the wall took light from the lit room's floor points
@@ -196,7 +197,9 @@ VL_HOSTDEV inline bool clearPath(const MipLevelView& occupancy, float h, const v
 }
 
 // The interpolation weight of gather point q at surface point p with unit normal n (see
-// above), visibility aside; 0 where q does not apply.
+// above), visibility and its mass aside; 0 where q does not apply. The home a receiver takes
+// its points through is chosen by this geometric part alone (a thin strip's own point should
+// not lose it to a fuller layer's in the same cell); visitFromHome applies the masses.
 VL_HOSTDEV inline float cacheWeight(const GatherPoint& q, const vec3& p, const vec3& n, float inverseCell) {
     // The tents along the axes first: most points a receiver's home links lie a cell or more
     // away on some axis, and their weight is 0 whatever they face.
@@ -207,13 +210,13 @@ VL_HOSTDEV inline float cacheWeight(const GatherPoint& q, const vec3& p, const v
     if (!(facing > 0.0f)) return 0.0f;
     float w = facing * glm::max(0.0f, 1.0f - glm::abs(glm::dot(d, q.normal)) * inverseCell);
     for (int a = 0; a < 3; ++a) w *= tent[a];
-    return w * q.mass;
+    return w;
 }
 
 // Calls visit(point index, weight) for every point with weight > 0 at (p, n) that p sees;
 // returns the weights' sum (0: no point applies). Visibility is tested once per receiver:
-// its home point is the heaviest point of its own cell (else of the cells around) with a
-// clear path from p, and the points it takes are the home's neighbours (linked by
+// its home point is the point of its own cell (else of the cells around) with the largest
+// geometric weight (cacheWeight, no mass) and a clear path from p, and the points it takes are the home's neighbours (linked by
 // IrradianceCache::link, which tested their paths from the home). A wall between p and a
 // point a cell away nearly always stands between the home and that point too, and one test
 // per receiver instead of one per point made the bounces' weights 4 times cheaper (the
@@ -236,7 +239,7 @@ VL_HOSTDEV inline float visitCachePoints(const IrradianceCacheView& cache, const
     IndexLeafCache cells;
     const vec3 lifted = liftOffSurface(p, n, h);
     // The home: own cell first (ring 0), then the cells around (ring 1); within a ring the
-    // heaviest points first (ties: the lower index), each tried until one is seen, at most
+    // geometrically heaviest points first (ties: the lower index), each tried until one is seen, at most
     // kHomeTries paths in all.
     constexpr int kHomeTries = 4;
     constexpr int kMaxCandidates = 64;
@@ -286,7 +289,7 @@ VL_HOSTDEV inline float visitFromHome(const IrradianceCacheView& cache, uint32_t
     float total = 0.0f;
     for (uint32_t k = cache.neighbourBegin[home]; k < cache.neighbourBegin[home + 1]; ++k) {
         const uint32_t q = cache.neighbours[k];
-        const float w = cacheWeight(cache.points[q], p, n, inverseCell);
+        const float w = cacheWeight(cache.points[q], p, n, inverseCell) * cache.points[q].mass;
         if (!(w > 0.0f)) continue;
         visit(q, w);
         total += w;

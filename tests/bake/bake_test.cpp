@@ -288,7 +288,8 @@ double whiteBoxIndirectPowerRatio(const Scene& scene, int resolution, int lightm
     return indirectPower / (bounces == 0 ? kWhiteBoxEmitted * rho : kWhiteBoxEmitted * rho / (1.0 - rho));
 }
 
-TEST_CASE("A closed white box's indirect power holds energy conservation at every alignment of its walls in the cells",
+TEST_CASE("A closed white box's indirect power stays near energy conservation at every alignment of its walls in "
+          "the cells",
           "[bake]") {
     // Energy conservation: the emitted power Φ bounces with albedo ρ, so Σ over surfaces of
     // E_indirect·A is Φ·ρ/(1−ρ) when every bounce reaches some surface (the emitter's black
@@ -303,7 +304,7 @@ TEST_CASE("A closed white box's indirect power holds energy conservation at ever
     // by where the walls sat. The bounds are the measurements with a point or two to spare;
     // they are not a derived limit.
     const Scene scene = whiteBox();
-    double lowest[2] = {1e9, 1e9}, highest[2] = {0.0, 0.0};
+    double lowest[2] = {1e9, 1e9}, highest[2] = {0.0, 0.0}, sum[2] = {0.0, 0.0};
     for (int resolution = 41; resolution <= 55; resolution += 2)
         for (int bounces : {0, 8}) {
             const double ratio = whiteBoxIndirectPowerRatio(scene, resolution, 16, bounces);
@@ -311,8 +312,15 @@ TEST_CASE("A closed white box's indirect power holds energy conservation at ever
             const int k = bounces == 0 ? 0 : 1;
             lowest[k] = std::min(lowest[k], ratio);
             highest[k] = std::max(highest[k], ratio);
+            sum[k] += ratio / 8.0;
         }
-    INFO("first gather " << lowest[0] << " … " << highest[0] << ", series " << lowest[1] << " … " << highest[1]);
+    INFO("first gather " << lowest[0] << " … " << highest[0] << " (mean " << sum[0] << "), series " << lowest[1]
+                         << " … " << highest[1] << " (mean " << sum[1] << ")");
+    // Over the eight alignments the errors must not all lean one way (measured means 1.007 and
+    // 0.997): the emitter's black back takes a little, so the exact value lies just under 1.
+    CHECK(sum[0] < 1.015);
+    CHECK(sum[1] < 1.01);
+    CHECK(sum[1] > 0.98);
     CHECK(lowest[0] > 0.99);
     CHECK(highest[0] < 1.04);
     CHECK(lowest[1] > 0.95);
