@@ -7,11 +7,11 @@
 //    (the axes of its most common surface orientations) so a scene modelled at an angle to
 //    the world axes gets the voxels it would get unturned. 111: the coarsest count at which
 //    the Cycles quad box's lightmap meets issue 13's 3% against Cycles at each of sixteen
-//    turns (2.40–3.00%, the worst 3.002%; 103 voxels: 3.11%, 95: 3.30%;
-//    build/accuracy/accuracy_rotations, 2026-11-27). By error² × time alone 63–95 voxels are
-//    cheaper on both Cornell boxes (111 is 1.30 / 1.32× the best lightmap point, `voxlight
-//    bench`, 2026-11-27), and 127 on the two rooms (111: 1.25×), whose error is not a smooth
-//    function of the voxel size (2.63–3.41% over 101–133 voxels). 63 was the rule while the gathers went by cones, whose
+//    turns (2.41–2.84%; 103 voxels: 3.13%, 95: 3.26%; build/accuracy/accuracy_rotations,
+//    2026-11-27). By error² × time alone 63–95 voxels are cheaper on both Cornell boxes (111
+//    is 1.18 / 1.17× the best lightmap point, `voxlight bench`, 2026-11-27), and 127 on the
+//    two rooms (111: 1.19×), whose error is not a smooth function of the voxel size
+//    (2.63–3.41% over 101–133 voxels). 63 was the rule while the gathers went by cones, whose
 //    error did not fall with finer voxels (quad 4.9% at 63, 5.9% at 111). Tried and not
 //    taken: 6 voxels along the median free path between surfaces (103 on zdm2: 28.0% image
 //    error against 31.3% at 63, by cones, but 1.2× the error² × time).
