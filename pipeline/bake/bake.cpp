@@ -321,7 +321,7 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
                 } else {
                     origins.reserve(cache.points().size());  // the cones' apex
                     for (const GatherPoint& point : cache.points())
-                        origins.push_back(point.position + point.normal * (settings.cone.startOffset * h));
+                        origins.push_back(coneApex(point.position, point.normal, settings.cone, h));
                 }
                 addBrightPatchIrradiance(cache.points(), origins, split.patches, bvhView, h, irradiance);
                 cache.setIrradiance(std::move(irradiance));

@@ -259,8 +259,14 @@ VL_HOSTDEV inline float coneHalfAngle(const ConeSet& set, const ConeSettings& se
     return settings.apertureDegrees > 0.0f ? glm::radians(settings.apertureDegrees) : set.defaultHalfAngle;
 }
 
+// Where the cones of a point p with unit normal n start: settings.startOffset voxels of size h
+// along n (what a gather by cones sees from; the bright patches and tools start there too).
+VL_HOSTDEV inline vec3 coneApex(const vec3& p, const vec3& n, const ConeSettings& settings, float h) {
+    return p + n * (settings.startOffset * h);
+}
+
 // Irradiance E at point p with normal n: π Σ_k w_k L_k over the set's cones around n, all
-// starting settings.startOffset voxels along n. A zero or non-finite n or p gives zero.
+// starting settings.startOffset voxels along n (coneApex). A zero or non-finite n or p gives zero.
 // `occlusion`, if given, receives Σ_k w_k A_k (cosine-weighted ambient occlusion).
 // `turn` (in turns, [0, 1)) rotates the set about n. Why: a fixed set sees a small bright
 // region (a light's hot spot on the ceiling) fully when a cone points at it and barely
@@ -291,7 +297,7 @@ VL_HOSTDEV inline vec3 coneTraceIrradiance(const MipView& mips, const vec3& p, c
         tangent = turned;
     }
     const float tanHalfAngle = glm::tan(coneHalfAngle(set, settings));
-    const vec3 apex = p + normal * (settings.startOffset * mips.voxelSize);
+    const vec3 apex = coneApex(p, normal, settings, mips.voxelSize);
     vec3 sum(0.0f);
     float occluded = 0.0f;
     for (int k = 0; k < set.count; ++k) {

@@ -142,7 +142,7 @@ int main(int argc, char** argv) {
         Sums byRing[4];
         std::vector<std::pair<vec3, std::array<double, 2>>> mapped;
         for (const GatherPoint& point : cache.points()) {
-            const vec3 apex = point.position + point.normal * (settings.cone.startOffset * h);
+            const vec3 apex = coneApex(point.position, point.normal, settings.cone, h);
             // The mesh under the point: the first surface straight back from the apex.
             Ray down;
             down.origin = apex;
