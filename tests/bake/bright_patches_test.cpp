@@ -182,4 +182,11 @@ TEST_CASE("A bright patch gives a gather point L A cos cos / r^2 far off, pi L c
     patch.normal = vec3(0.0f, 1.0f, 0.0f);
     patch.position = vec3(0.0f, -2.0f, 0.0f);
     CHECK(irradianceWith(open) == vec3(0.0f));
+
+    // One origin for every point, or an error that says how many came.
+    const SceneTriangles triangles = gatherTriangles(open);
+    const Bvh bvh = Bvh::build(triangles);
+    std::vector<vec3> irradiance(2, vec3(0.0f));
+    CHECK_THROWS_WITH(addBrightPatchIrradiance({point, point}, {point.position}, {patch}, bvh.view(), h, irradiance),
+                      Catch::Contains("1 origins and 2 irradiance values for 2 gather points"));
 }

@@ -71,6 +71,28 @@ TEST_CASE("Gather points: one per surface side of each occupied cell, at its vox
     CHECK_THROWS_AS(IrradianceCache(twoSided.build(), 17), SettingsError);
 }
 
+TEST_CASE("A gather point's mass is the root of the share of its cell's columns its layer fills", "[cone]") {
+    // Level 3: 8 × 8 columns a cell. A floor over x in [0, 17) leaves a strip one voxel wide in
+    // its third cell along x (8 of 64 columns); a floor two voxels deep over [0, 2) × [0, 8)
+    // fills 16 columns with 32 voxels, which count once each.
+    const double h = 0.1;
+    SceneBuilder strip(h);
+    addFloor(strip, 0, 17, 16);
+    const IrradianceCache cache(strip.build(), 3);
+    REQUIRE(cache.points().size() == 6);
+    for (const GatherPoint& p : cache.points()) {
+        INFO("point at x " << p.position.x);
+        CHECK(p.mass == Approx(p.position.x > 1.55f ? std::sqrt(8.0f / 64.0f) : 1.0f).epsilon(1e-6));
+    }
+    SceneBuilder deep(h);
+    for (int y : {0, 1})
+        for (int x = 0; x < 2; ++x)
+            for (int z = 0; z < 8; ++z) deep.add(ivec3(x, y, z), surface(vec3(0, 1, 0)));
+    const IrradianceCache deepCache(deep.build(), 3);
+    REQUIRE(deepCache.points().size() == 1);
+    CHECK(deepCache.points()[0].mass == Approx(0.5f).epsilon(1e-6));
+}
+
 TEST_CASE("Interpolation reproduces constant and linear irradiance on a plane", "[cone]") {
     const double h = 0.1;
     SceneBuilder builder(h);
