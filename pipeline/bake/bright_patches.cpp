@@ -1,7 +1,6 @@
 #include "bake/bright_patches.h"
 
 #include "core/error.h"
-
 #include "core/polygon_irradiance.h"
 #include "trace/bvh_traverse.h"
 

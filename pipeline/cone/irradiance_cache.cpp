@@ -55,7 +55,7 @@ namespace {
 
 // Where a layer's point sits: the mean centre of its voxels, or, with a probe, of those whose
 // surface is open (IrradianceCache's constructor says why and how); and the mass it takes
-// (IrradianceCache.h): √ of the share of the cell's cross-section those voxels cover, counted
+// (irradiance_cache.h): √ of the share of the cell's cross-section those voxels cover, counted
 // by their distinct columns across the layer's axis, so that a layer two voxels deep (a plane
 // on a voxel boundary) or a slanted one counts each column once.
 vec3 layerPosition(const VoxelScene& voxels, const Side* sides, size_t count, int level, const EnclosedProbe* enclosed,

@@ -48,8 +48,8 @@
 // Why the visibility test: two rooms' floors in one plane, a wall between them, face the
 // same way, and the dark room's floor by the wall took light from the lit room's floor points
 // (3.9% of the lit room's mean across a wall one voxel thick). Where no point applies (p by a
-// wall it cannot see past, an isolated sliver) the caller gathers cones at p itself, so every
-// receiver gets light.
+// wall it cannot see past, an isolated sliver) the caller gathers at p itself (cones, or rays
+// where the points were gathered by rays: shade_element.h), so every receiver gets light.
 #pragma once
 
 #include "cone/cone_trace.h"
@@ -216,8 +216,9 @@ VL_HOSTDEV inline float cacheWeight(const GatherPoint& q, const vec3& p, const v
 // Calls visit(point index, weight) for every point with weight > 0 at (p, n) that p sees;
 // returns the weights' sum (0: no point applies). Visibility is tested once per receiver:
 // its home point is the point of its own cell (else of the cells around) with the largest
-// geometric weight (cacheWeight, no mass) and a clear path from p, and the points it takes are the home's neighbours (linked by
-// IrradianceCache::link, which tested their paths from the home). A wall between p and a
+// geometric weight (cacheWeight, no mass) and a clear path from p, and the points it takes
+// are the home's neighbours (linked by IrradianceCache::link, which tested their paths from
+// the home). A wall between p and a
 // point a cell away nearly always stands between the home and that point too, and one test
 // per receiver instead of one per point made the bounces' weights 4 times cheaper (the
 // bounces stage in bake.json of the default Cornell quad bake), at the same lightmap error.
@@ -239,8 +240,8 @@ VL_HOSTDEV inline float visitCachePoints(const IrradianceCacheView& cache, const
     IndexLeafCache cells;
     const vec3 lifted = liftOffSurface(p, n, h);
     // The home: own cell first (ring 0), then the cells around (ring 1); within a ring the
-    // geometrically heaviest points first (ties: the lower index), each tried until one is seen, at most
-    // kHomeTries paths in all.
+    // geometrically heaviest points first (ties: the lower index), each tried until one is
+    // seen, at most kHomeTries paths in all.
     constexpr int kHomeTries = 4;
     constexpr int kMaxCandidates = 64;
     uint32_t candidate[kMaxCandidates];
