@@ -88,6 +88,9 @@ nlohmann::json reportJson(const BakeReport& report, const BakeSettings& settings
     json["voxel_size"] = report.voxelSize;
     json["voxel_size_set_by"] = report.voxelSizeChoice.setBy;
     json["voxels_along_longest_side"] = report.voxelSizeChoice.voxelsAlongLongest;
+    if (const FreePaths& f = report.voxelSizeChoice.freePaths; f.rays > 0)
+        json["free_paths"] = {{"rays", f.rays}, {"hits", f.hits}, {"mean_metres", f.mean}, {"median_metres", f.median},
+                              {"single_sided_backs", f.singleSidedBacks}};
     for (const LightClearance& c : report.voxelSizeChoice.clearances)
         json["light_clearances"].push_back({{"light", c.light}, {"metres", c.metres}});
     json["voxels"] = report.voxels;

@@ -70,7 +70,7 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.bounceCones = parseIntSetting("bounce-cones", v, 1, 64); }},
         {"bounce-tail", "add the rest of the bounce series as a geometric tail after the last bounce (default true)",
          [](S& s, const std::string& v) { s.bounceTail = parseBoolSetting("bounce-tail", v); }},
-        {"gather-level", "receivers interpolate irradiance gathered once per surface side of each block of 2^n voxels; -1: every sample gathers its own cones (default 3)",
+        {"gather-level", "receivers interpolate irradiance gathered once per surface side of each block of 2^n voxels; -1: every sample gathers its own cones (default 2)",
          [](S& s, const std::string& v) { s.gatherLevel = parseIntSetting("gather-level", v, -1, kMaxCacheLevel); }},
         {"gather-turns", "cone sets traced per gather point of the final gather, each turned by 1/n turn (default 2)",
          [](S& s, const std::string& v) { s.gatherTurns = parseIntSetting("gather-turns", v, 1, kMaxGatherTurns); }},
@@ -86,7 +86,7 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.gatherRays = parseIntSetting("gather-rays", v, 1, kMaxGatherRaysPerAxis); }},
         {"bounce-rays", "rays per axis of each bounce gather point's n x n fan when gathering by rays, traced once for all bounces (default 14)",
          [](S& s, const std::string& v) { s.bounceRays = parseIntSetting("bounce-rays", v, 1, kMaxGatherRaysPerAxis); }},
-        {"bounce-gather-level", "voxels interpolate bounce light gathered once per surface side of each block of 2^n voxels (default 3)",
+        {"bounce-gather-level", "voxels interpolate bounce light gathered once per surface side of each block of 2^n voxels (default 2)",
          [](S& s, const std::string& v) { s.bounceGatherLevel = parseIntSetting("bounce-gather-level", v, 0, kMaxCacheLevel); }},
         // Receivers
         {"lightmap-res", "lightmap atlas width and height in texels (default 256)",

@@ -57,8 +57,8 @@ struct BakeSettings {
     // 7.76% / 8.99%. Every sample: 6.42% / 8.54%; 9.05% / 10.83%. Bounces at level 2 instead of
     // 3: 5.85% / 7.86%; 7.63% / 8.69%. The interpolation averages the cone sets of several
     // points, each turned its own way, and that average errs less than any one set.
-    int gatherLevel = 3;
-    int bounceGatherLevel = 3;
+    int gatherLevel = 2;
+    int bounceGatherLevel = 2;
     // Cone sets per gather point of the final gather, turned by 1/n turn from one another
     // (irradiance_cache.h gatherAtPoint): 2 halve the gaps between the cones that a small
     // bright region (a point light's hot spot) falls into (one set: 5.99% / 8.16%;

@@ -1,12 +1,21 @@
 #include "bake/voxel_size.h"
 
 #include "bake/bake.h"
+#include "bake/gather_visibility.h"
 #include "core/error.h"
 #include "core/memory.h"
 #include "core/math.h"
+#include "scene/own_frame.h"
+#include "core/ray.h"
+#include "core/rng.h"
+#include "core/sampling.h"
+#include "trace/bvh.h"
+#include "trace/bvh_traverse.h"
+#include "trace/ray_offset.h"
 #include "voxel/voxelize.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
@@ -63,75 +72,106 @@ double distanceToNearestTriangle(const std::vector<TriangleRef>& triangles, cons
     return std::sqrt(nearestSquared);
 }
 
-// The longest side of the scene's box in its own frame: the axes of its two most common
-// surface orientations (area-weighted; a normal and its opposite are one orientation), or the
-// axis-aligned box where that is no shorter. Why: a room modelled at an angle to the world axes
-// has axis-aligned bounds up to √3 times its own size, and a voxel size taken from those gave
-// the turned Cycles Cornell boxes as few as 36 voxels across themselves (lightmap error over 16
-// random turns: quad mean 7.0%, point 10.9%, unturned 4.9% / 5.8%).
+// The longest side of the scene's box in its own frame (scene/own_frame.h), or the
+// axis-aligned box where that is no shorter. Why: the size is chosen before the bake turns the
+// scene into its own frame, and a room modelled at an angle to the world axes has axis-aligned
+// bounds up to √3 times its own size.
 double ownFrameLongestSide(const Scene& scene, double axisAlignedLongest) {
-    constexpr int kBins = 32;  // per side of the octahedral map of orientations
-    struct Face {
-        glm::dvec3 normal;  // unit, its largest component positive (one per orientation)
-        double area;
-    };
-    std::vector<Face> faces;
-    for (const Mesh& mesh : scene.meshes)
-        for (size_t t = 0; t < mesh.triangleCount(); ++t) {
-            const glm::dvec3 a(mesh.positions[mesh.indices[3 * t]]), b(mesh.positions[mesh.indices[3 * t + 1]]),
-                c(mesh.positions[mesh.indices[3 * t + 2]]);
-            glm::dvec3 n = glm::cross(b - a, c - a);
-            const double twiceArea = glm::length(n);
-            if (!(twiceArea > 0.0)) continue;
-            n /= twiceArea;
-            int axis = 0;
-            for (int k = 1; k < 3; ++k)
-                if (std::abs(n[k]) > std::abs(n[axis])) axis = k;
-            if (n[axis] < 0.0) n = -n;
-            faces.push_back({n, 0.5 * twiceArea});
-        }
-    // The area-weighted mean orientation of the fullest bin of those faces `take` accepts.
-    const auto dominant = [&](auto&& take, glm::dvec3& axis) {
-        std::vector<double> area(kBins * kBins, 0.0);
-        std::vector<glm::dvec3> sum(kBins * kBins, glm::dvec3(0.0));
-        for (const Face& f : faces) {
-            if (!take(f.normal)) continue;
-            glm::dvec3 p = f.normal / (std::abs(f.normal.x) + std::abs(f.normal.y) + std::abs(f.normal.z));
-            if (p.z < 0.0) {
-                const double x = (1.0 - std::abs(p.y)) * (p.x < 0.0 ? -1.0 : 1.0);
-                p.y = (1.0 - std::abs(p.x)) * (p.y < 0.0 ? -1.0 : 1.0);
-                p.x = x;
-            }
-            const int i = std::min(kBins - 1, int((p.x + 1.0) * 0.5 * kBins));
-            const int j = std::min(kBins - 1, int((p.y + 1.0) * 0.5 * kBins));
-            area[j * kBins + i] += f.area;
-            sum[j * kBins + i] += f.area * f.normal;
-        }
-        const size_t best = size_t(std::max_element(area.begin(), area.end()) - area.begin());
-        if (!(area[best] > 0.0)) return false;
-        axis = glm::normalize(sum[best]);
-        return true;
-    };
-    glm::dvec3 first, second;
-    if (!dominant([](const glm::dvec3&) { return true; }, first)) return axisAlignedLongest;
-    if (dominant([&](const glm::dvec3& n) { return std::abs(glm::dot(n, first)) < 0.1; }, second)) {
-        second = glm::normalize(second - glm::dot(second, first) * first);
-    } else {
-        vec3 t, b;
-        orthonormalBasis(vec3(first), t, b);
-        second = glm::dvec3(t);
-    }
-    const glm::dvec3 third = glm::cross(first, second);
+    const glm::dmat3 axes = ownFrameAxes(scene);
     glm::dvec3 lower(std::numeric_limits<double>::infinity()), upper(-std::numeric_limits<double>::infinity());
     for (const Mesh& mesh : scene.meshes)
         for (const vec3& v : mesh.positions) {
-            const glm::dvec3 q(glm::dot(glm::dvec3(v), first), glm::dot(glm::dvec3(v), second),
-                               glm::dot(glm::dvec3(v), third));
+            const glm::dvec3 q = glm::dvec3(v) * axes;  // (axesᵀ v): v along each own axis
             lower = glm::min(lower, q);
             upper = glm::max(upper, q);
         }
     const glm::dvec3 side = upper - lower;
     return std::min(axisAlignedLongest, std::max(side.x, std::max(side.y, side.z)));
+}
+
+}  // namespace
+
+FreePaths surfaceFreePaths(const Scene& scene, int rays) {
+    FreePaths out;
+    const SceneTriangles triangles = gatherTriangles(scene);
+    const size_t count = triangles.meshIndex.size();
+    if (count == 0 || rays <= 0) return out;
+    // Points uniform by area: each ray picks a triangle from the area CDF, then a point on it.
+    std::vector<double> cdf(count);
+    double area = 0.0;
+    for (size_t t = 0; t < count; ++t) {
+        const glm::dvec3 a(triangles.vertices[3 * t]), b(triangles.vertices[3 * t + 1]), c(triangles.vertices[3 * t + 2]);
+        area += 0.5 * glm::length(glm::cross(b - a, c - a));
+        cdf[t] = area;
+    }
+    if (!(area > 0.0)) return out;
+    const Bvh bvh = Bvh::build(triangles);
+    const BvhView view = bvh.view();
+    std::vector<float> lengths(static_cast<size_t>(rays), -1.0f);  // −1: left the scene
+    std::vector<uint8_t> backs(static_cast<size_t>(rays), 0);        // hit a single-sided back
+    tbb::parallel_for(tbb::blocked_range<int>(0, rays, 256), [&](const tbb::blocked_range<int>& range) {
+        for (int r = range.begin(); r != range.end(); ++r) {
+            Pcg32 rng = Pcg32::forItem(uint64_t(r), 0, 0x66726565u);
+            const double pick = (double(r) + double(rng.next1D())) / double(rays) * area;
+            const size_t t = std::min(count - 1, size_t(std::lower_bound(cdf.begin(), cdf.end(), pick) - cdf.begin()));
+            const vec3 a = triangles.vertices[3 * t], b = triangles.vertices[3 * t + 1], c = triangles.vertices[3 * t + 2];
+            vec3 n = glm::cross(b - a, c - a);
+            if (!(glm::length(n) > 0.0f)) continue;
+            n = glm::normalize(n);
+            float u, v;
+            rng.next2D(u, v);
+            if (u + v > 1.0f) {
+                u = 1.0f - u;
+                v = 1.0f - v;
+            }
+            vec2 w;
+            rng.next2D(w.x, w.y);
+            vec3 tangent, bitangent;
+            orthonormalBasis(n, tangent, bitangent);
+            const vec3 local = sampleCosineHemisphere(w);
+            Ray ray;
+            ray.origin = offsetRayOrigin(a + u * (b - a) + v * (c - a), n, view.extent);
+            ray.direction = glm::normalize(local.x * tangent + local.y * bitangent + local.z * n);
+            Hit hit;
+            if (!intersectClosest(view, ray, hit)) continue;
+            lengths[size_t(r)] = hit.t;
+            const uint32_t h = hit.triangle;
+            const vec3 ha = triangles.vertices[3 * h], hb = triangles.vertices[3 * h + 1], hc = triangles.vertices[3 * h + 2];
+            backs[size_t(r)] = glm::dot(ray.direction, glm::cross(hb - ha, hc - ha)) > 0.0f &&
+                               !scene.materialOf(scene.meshes[triangles.meshIndex[h]]).doubleSided;
+        }
+    });
+    std::vector<float> hits;
+    hits.reserve(lengths.size());
+    double sum = 0.0;
+    for (const float l : lengths)
+        if (l >= 0.0f) {
+            hits.push_back(l);
+            sum += l;
+        }
+    out.rays = rays;
+    out.hits = static_cast<int>(hits.size());
+    for (const uint8_t back : backs) out.singleSidedBacks += back;
+    if (hits.empty()) return out;
+    out.mean = sum / double(hits.size());
+    std::nth_element(hits.begin(), hits.begin() + hits.size() / 2, hits.end());
+    out.median = hits[hits.size() / 2];
+    return out;
+}
+
+namespace {
+
+// The count nearest x of the form 2·cellVoxels·k − 1 (at least one such). Why: the bake
+// centres the scene's box on a voxel corner (anchorToVoxelGrid), so with such a count along a
+// side the two walls that bound it lie in the outermost voxels of whole gather cells, each
+// cell's point standing for a full cell of wall. Other counts cut those cells: on the Cycles
+// Cornell boxes at gather level 2 (cells of 4 voxels) 55 / 63 / 71 / 79 voxels gave lightmap
+// errors of 2.96 / 2.70 / 2.72 / 2.64% (quad) and 2.88 / 2.69 / 2.46 / 2.58% (point), and 59 /
+// 67 / 75 gave 3.55 / 3.14 / 3.18% and 3.48 / 3.15 / 2.79% (`voxlight bench`, 2026-11-27).
+int cellAlignedCount(double x, int cellVoxels) {
+    const double period = 2.0 * cellVoxels;
+    const double k = std::max(1.0, std::round((std::min(x, double(1 << 21)) + 1.0) / period));
+    return static_cast<int>(k * period) - 1;
 }
 
 // The smallest odd count ≥ x, and the largest odd count ≤ x (at least 1).
@@ -173,20 +213,41 @@ VoxelSizeChoice chooseVoxelSize(const Scene& scene, const BakeSettings& settings
         choice.voxelSize = sizeRuleVoxel;
         choice.setBy = settings.voxel.voxelSize > 0.0 ? "the voxel-size setting" : "the resolution setting";
     } else {
-        // The own frame counts where it is shorter by more than rounding: an axis-aligned
-        // scene keeps exactly kSceneVoxels in every quarter turn.
+        const FreePaths& paths = choice.freePaths = surfaceFreePaths(scene);
+        const bool byCones = settings.gatherVisibility == GatherVisibility::Cones ||
+                             (settings.gatherVisibility == GatherVisibility::Auto && paths.backShare() > kBackShareLimit);
+        // Counts along the scene's own longest side: the bake turns the scene into its own
+        // frame (voxelize.h anchorToVoxelGrid), and that side is then along a grid axis.
         const double ownLongest = ownFrameLongestSide(scene, longest);
         const bool turned = ownLongest < longest * (1.0 - 1e-4);
-        int voxels = turned ? oddAtLeast(longest / (ownLongest / kSceneVoxels)) : kSceneVoxels;
-        choice.setBy = "the scene's size (" + std::to_string(kSceneVoxels) + " voxels along its longest side, " +
-                       lengthText(turned ? ownLongest : longest) + (turned ? ", in its own frame)" : ")");
+        const int cellVoxels = 1 << std::max(0, std::max(settings.gatherLevel, settings.bounceGatherLevel));
+        int ownVoxels = 0;
+        char text[320];
+        if (!byCones && 2 * paths.hits >= paths.rays) {
+            ownVoxels = cellAlignedCount(ownLongest / (paths.mean / kVoxelsPerFreePath), cellVoxels);
+            std::snprintf(text, sizeof text,
+                          "the mean free path between its surfaces (%g voxels along %s, over the %.0f%% of %d rays that "
+                          "hit; %d along its longest side, %s%s)",
+                          kVoxelsPerFreePath, lengthText(paths.mean).c_str(), 100.0 * paths.hits / paths.rays,
+                          paths.rays, ownVoxels, lengthText(ownLongest).c_str(), turned ? ", in its own frame" : "");
+        } else {
+            ownVoxels = cellAlignedCount(kSceneVoxels, cellVoxels);
+            std::snprintf(text, sizeof text, "the scene's size (%d voxels along its longest side, %s%s; %s)", ownVoxels,
+                          lengthText(ownLongest).c_str(), turned ? ", in its own frame" : "",
+                          byCones ? "it gathers by cones, whose error does not fall with finer voxels"
+                                  : "most rays from its surfaces leave it: an open scene");
+        }
+        choice.setBy = text;
+        double voxelSize = ownLongest / ownVoxels;
+        const int ruleVoxels = oddAtLeast(longest / voxelSize * (1.0 - 1e-9));  // along the axis-aligned box
+        const int maxVoxels = kMaxRefinement * (ruleVoxels + 1) - 1;
         const LightClearance* nearest = choice.clearances.empty() ? nullptr : &choice.clearances.front();
-        if (nearest && nearest->metres > 0.0 && longest / nearest->metres > voxels) {
-            voxels = std::min(oddAtLeast(longest / nearest->metres), kMaxChosenVoxels);
+        if (nearest && nearest->metres > 0.0 && nearest->metres < voxelSize) {
+            voxelSize = longest / std::min(oddAtLeast(longest / nearest->metres), maxVoxels);
             choice.setBy = "light '" + nearest->light + "', " + lengthText(nearest->metres) +
                            " from the nearest surface (at least one voxel between them)";
         } else if (nearest && nearest->metres <= 0.0) {
-            voxels = kMaxChosenVoxels;
+            voxelSize = longest / maxVoxels;
             choice.setBy = "light '" + nearest->light + "', which lies on a surface";
         }
         // The finest voxel the memory holds: the estimate is ∝ 1/h² past its fixed part.
@@ -195,13 +256,13 @@ VoxelSizeChoice chooseVoxelSize(const Scene& scene, const BakeSettings& settings
         const double spare = availableMemoryBytes() - fixedBytes;
         if (perInverseSquare > 0.0 && spare > 0.0) {
             const int fitting = oddAtMost(longest / std::sqrt(perInverseSquare / spare));
-            if (fitting < voxels) {
-                voxels = fitting;
+            if (longest / fitting > voxelSize) {
+                voxelSize = longest / fitting;
                 choice.setBy = "the memory available (" + std::to_string(static_cast<long long>(spare / 1048576.0)) +
                                " MiB past the receivers)";
             }
         }
-        choice.voxelSize = longest / voxels;
+        choice.voxelSize = voxelSize;
     }
     choice.voxelsAlongLongest = static_cast<int>(std::lround(longest / choice.voxelSize));
 

@@ -59,9 +59,12 @@ void writeVoxelState(const VoxelStages& stages, size_t triangles, const std::vec
     h["tool_version"] = VOXLIGHT_VERSION;
     h["voxel_size"] = v.voxelSize;
     h["origin"] = {v.origin.x, v.origin.y, v.origin.z};
+    for (int c = 0; c < 3; ++c) h["frame"].push_back({v.frame[c].x, v.frame[c].y, v.frame[c].z});
     const VoxelSizeChoice& c = r.voxelSizeChoice;
     h["choice"] = {{"voxel_size", c.voxelSize}, {"along_longest", c.voxelsAlongLongest}, {"set_by", c.setBy},
                    {"warnings", c.warnings}};
+    const FreePaths& f = c.freePaths;
+    h["choice"]["free_paths"] = {f.rays, f.hits, f.singleSidedBacks, f.mean, f.median};
     for (const LightClearance& clearance : c.clearances)
         h["choice"]["clearances"].push_back({{"light", clearance.light}, {"metres", clearance.metres}});
     for (const StageTime& s : r.stages) h["stages"].push_back({{"stage", s.stage}, {"seconds", s.seconds}});
@@ -114,11 +117,17 @@ VoxelState readVoxelState(const std::string& path) {
     VoxelScene& v = r.voxels;
     v.voxelSize = h.at("voxel_size").get<double>();
     v.origin = glm::dvec3(h.at("origin")[0].get<double>(), h.at("origin")[1].get<double>(), h.at("origin")[2].get<double>());
+    for (int c = 0; c < 3; ++c)
+        v.frame[c] = glm::dvec3(h.at("frame")[c][0].get<double>(), h.at("frame")[c][1].get<double>(),
+                                h.at("frame")[c][2].get<double>());
     const json& c = h.at("choice");
     r.voxelSizeChoice.voxelSize = c.at("voxel_size").get<double>();
     r.voxelSizeChoice.voxelsAlongLongest = c.at("along_longest").get<int>();
     r.voxelSizeChoice.setBy = c.at("set_by").get<std::string>();
     r.voxelSizeChoice.warnings = c.at("warnings").get<std::vector<std::string>>();
+    const json& f = c.at("free_paths");
+    r.voxelSizeChoice.freePaths = {f[0].get<int>(), f[1].get<int>(), f[2].get<int>(), f[3].get<double>(),
+                                   f[4].get<double>()};
     if (c.contains("clearances"))
         for (const json& clearance : c["clearances"])
             r.voxelSizeChoice.clearances.push_back({clearance.at("light").get<std::string>(), clearance.at("metres").get<double>()});

@@ -383,6 +383,7 @@ RadianceMips buildMips(const VoxelScene& voxels, const std::vector<vec3>& radian
     RadianceMips mips;
     mips.voxelSize_ = voxels.voxelSize;
     mips.origin_ = voxels.origin;
+    mips.frame_ = voxels.frame;
     if (voxels.size() == 0) return mips;
 
     ivec3 lo = voxels.coords.front(), hi = voxels.coords.front();
@@ -410,7 +411,8 @@ std::vector<ExtraGrid> mipGridsForFile(const RadianceMips& mips) {
         radiance.name = "radiance_mip" + std::to_string(k);
         opacity.name = "opacity_mip" + std::to_string(k);
         radiance.voxelSize = opacity.voxelSize = level.voxelSize;
-        radiance.translation = opacity.translation = mips.origin() + glm::dvec3(level.centreOffset);
+        radiance.translation = opacity.translation = mips.origin() + mips.frame() * glm::dvec3(level.centreOffset);
+        radiance.frame = opacity.frame = mips.frame();
         radiance.coords = opacity.coords = level.coords;
         radiance.vectors.reserve(level.values.size());
         opacity.scalars.reserve(level.values.size());

@@ -161,6 +161,7 @@ public:
     int levelCount() const { return static_cast<int>(levels_.size()); }
     double voxelSize() const { return voxelSize_; }
     const glm::dvec3& origin() const { return origin_; }
+    const glm::dmat3& frame() const { return frame_; }
     const MipLevel& level(int k) const { return levels_.at(static_cast<size_t>(k)); }
     const MipIndexGrid* indexGrid(int k) const;
     MipView view() const;
@@ -180,7 +181,8 @@ private:
     friend RadianceMips buildMips(const VoxelScene&, const std::vector<vec3>&, const std::vector<FaceRadiance>*, bool);
     void addIndexGrids();  // of the levels that have none yet
     double voxelSize_ = 0.0;
-    glm::dvec3 origin_{0.0};  // the voxels' frame (VoxelScene::origin), for the file's grids
+    glm::dvec3 origin_{0.0};  // the voxels' frame (VoxelScene::origin, frame), for the file's grids
+    glm::dmat3 frame_{1.0};
     vec3 boundsMin_ = vec3(0.0f), boundsMax_ = vec3(0.0f);
     std::vector<MipLevel> levels_;
     std::vector<nanovdb::GridHandle<nanovdb::HostBuffer>> grids_;
@@ -216,7 +218,7 @@ RadianceMips buildRadianceMipsFor(const VoxelScene& voxels, MipReaders readers);
 
 // Grids for grids.vdb: per level k, `radiance_mip<k>` (Vec3, the isotropic α-premultiplied
 // radiance) and `opacity_mip<k>` (float α), voxel size 2^k·h, level k's voxel I centred in
-// world space at the voxels' origin + I·2^k·h + MipLevel::centreOffset.
+// world space at the voxels' origin + frame·(I·2^k·h + MipLevel::centreOffset).
 std::vector<ExtraGrid> mipGridsForFile(const RadianceMips& mips);
 
 }  // namespace vl

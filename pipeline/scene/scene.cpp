@@ -16,13 +16,32 @@ Aabb Scene::bounds() const {
 }
 
 void Scene::moveOrigin(const glm::dvec3& newOrigin) {
-    const glm::dvec3 shift = origin - newOrigin;
+    const glm::dvec3 shift = glm::transpose(frame) * (origin - newOrigin);
     const auto move = [&](vec3& p) { p = vec3(glm::dvec3(p) + shift); };
     for (Mesh& mesh : meshes)
         for (vec3& p : mesh.positions) move(p);
     for (Light& light : lights) move(light.position);
     for (Camera& camera : cameras) move(camera.position);
     origin = newOrigin;
+}
+
+void Scene::turnFrame(const glm::dmat3& newFrame) {
+    const glm::dmat3 turn = glm::transpose(newFrame) * frame;  // old local → new local
+    const auto turned = [&](vec3& v) { v = vec3(turn * glm::dvec3(v)); };
+    for (Mesh& mesh : meshes) {
+        for (vec3& p : mesh.positions) turned(p);
+        for (vec3& n : mesh.normals) turned(n);
+    }
+    for (Light& light : lights) {
+        turned(light.position);
+        turned(light.direction);
+    }
+    for (Camera& camera : cameras) {
+        turned(camera.position);
+        turned(camera.forward);
+        turned(camera.up);
+    }
+    frame = newFrame;
 }
 
 size_t Scene::triangleCount() const {

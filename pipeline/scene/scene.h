@@ -167,14 +167,17 @@ struct Sky {
 std::shared_ptr<const SkyImage> loadSkyImage(const std::string& path);
 
 // Positions, directions and lengths are in metres in the scene's local frame: world =
-// origin + local, origin the centre of the geometry's bounding box, found in double precision
-// before anything is rounded to float. Why: float holds a position 10 km from the world origin
-// to 1 mm, and voxels anchored at the world origin fell at other offsets inside their walls
-// when the scene moved; in the local frame a translated scene is the same floats.
+// origin + frame · local, origin the centre of the geometry's bounding box, found in double
+// precision before anything is rounded to float, frame a rotation (the identity until a bake
+// turns the scene into its own frame: voxelize.h anchorToVoxelGrid). Why: float holds a
+// position 10 km from the world origin to 1 mm, and voxels anchored at the world origin fell
+// at other offsets inside their walls when the scene moved; in the local frame a translated
+// scene is the same floats, and a turned one the same up to rounding.
 struct Scene {
     std::string sourcePath;  // the file it came from, for messages
     std::string name;        // file stem, used for output folders
     glm::dvec3 origin{0.0};  // world position of the local frame's origin
+    glm::dmat3 frame{1.0};   // the local frame's axes in world space (columns), a rotation
     std::vector<Mesh> meshes;
     std::vector<Material> materials;
     std::vector<Texture> textures;
@@ -192,6 +195,10 @@ struct Scene {
     // Re-expresses every position relative to `newOrigin` (world space) instead of `origin`:
     // for grids made in another frame (a .vdb whose translation is not this scene's origin).
     void moveOrigin(const glm::dvec3& newOrigin);
+    // Re-expresses every position and direction in the frame whose axes are `newFrame`'s
+    // columns (a rotation, world space) about the same origin: the scene stays where it is in
+    // the world.
+    void turnFrame(const glm::dmat3& newFrame);
 };
 
 }  // namespace vl

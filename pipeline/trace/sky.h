@@ -24,7 +24,9 @@ struct SkyView {
     const vec3* texels = nullptr;  // width × height, rows from the top; null: no image
     int width = 0, height = 0;
     float intensity = 1.0f;
-    float cosTurn = 1.0f, sinTurn = 0.0f;  // of the rotation θ
+    // The rows of the rotation from the scene's local frame to the image's: the frame to the
+    // world (Scene::frame), then R_y(−θ) for the image's rotation θ.
+    vec3 toImageRows[3] = {vec3(1.0f, 0.0f, 0.0f), vec3(0.0f, 1.0f, 0.0f), vec3(0.0f, 0.0f, 1.0f)};
     // Sampling tables (null when the image is black): per row the inclusive marginal CDF
     // (rowCdf[height - 1] = 1), per row and column the inclusive conditional CDF.
     const float* rowCdf = nullptr;
@@ -34,12 +36,12 @@ struct SkyView {
     VL_HOSTDEV bool samplable() const { return hasImage() && rowCdf != nullptr && columnCdf != nullptr; }
     VL_HOSTDEV bool present() const { return maxComponent(uniform) > 0.0f || (hasImage() && intensity > 0.0f); }
 
-    // World direction to the image's frame (R_y(−θ)) and back (R_y(θ)).
+    // A local direction to the image's frame and back.
     VL_HOSTDEV vec3 toImage(const vec3& d) const {
-        return vec3(cosTurn * d.x - sinTurn * d.z, d.y, sinTurn * d.x + cosTurn * d.z);
+        return vec3(glm::dot(toImageRows[0], d), glm::dot(toImageRows[1], d), glm::dot(toImageRows[2], d));
     }
     VL_HOSTDEV vec3 fromImage(const vec3& e) const {
-        return vec3(cosTurn * e.x + sinTurn * e.z, e.y, -sinTurn * e.x + cosTurn * e.z);
+        return e.x * toImageRows[0] + e.y * toImageRows[1] + e.z * toImageRows[2];
     }
     // Continuous (column, row) of an image-frame unit direction.
     VL_HOSTDEV vec2 imageCoordinates(const vec3& e) const {

@@ -5,6 +5,8 @@
 #include "scene/scene.h"
 #include "trace/bvh.h"
 
+#include <glm/gtc/matrix_access.hpp>
+
 #include <cmath>
 #include <string>
 
@@ -175,7 +177,9 @@ TraceScene TraceScene::build(const Scene& scene, const SceneTriangles& triangles
                         std::to_string(image.width) + " x " + std::to_string(image.height));
         out.skyImage = scene.sky.image;
         out.skyIntensity = scene.sky.intensity;
-        out.skyRotationRadians = glm::radians(scene.sky.rotationDegrees);
+        const double turn = glm::radians(double(scene.sky.rotationDegrees)), c = std::cos(turn), s = std::sin(turn);
+        const glm::dmat3 worldToImage(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c);  // R_y(−θ), columns
+        out.skyToImage = glm::mat3(worldToImage * scene.frame);
         // Pixels in proportion to luminance × sin θ (their solid angle), summed in double. A
         // pixel's luminance is the most the bilinear lookup shows anywhere inside it: at its
         // centre, its edges' middles or its corners, where it blends its neighbours. Drawn by
@@ -305,8 +309,7 @@ TraceSceneView TraceScene::view() const {
         v.sky.width = skyImage->width;
         v.sky.height = skyImage->height;
         v.sky.intensity = skyIntensity;
-        v.sky.cosTurn = std::cos(skyRotationRadians);
-        v.sky.sinTurn = std::sin(skyRotationRadians);
+        for (int r = 0; r < 3; ++r) v.sky.toImageRows[r] = glm::row(skyToImage, r);
         v.sky.rowCdf = skyRowCdf.empty() ? nullptr : skyRowCdf.data();
         v.sky.columnCdf = skyColumnCdf.empty() ? nullptr : skyColumnCdf.data();
     }

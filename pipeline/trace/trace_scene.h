@@ -121,7 +121,8 @@ public:
     // Scene::sky: its uniform part, image (sky.h) and the image's sampling tables.
     vec3 skyUniform{0.0f};
     std::shared_ptr<const SkyImage> skyImage;
-    float skyIntensity = 1.0f, skyRotationRadians = 0.0f;
+    float skyIntensity = 1.0f;
+    glm::mat3 skyToImage{1.0f};  // local direction → the image's frame (SkyView::toImageRows)
     std::vector<float> skyRowCdf, skyColumnCdf;
 };
 

@@ -302,21 +302,47 @@ private:
     std::map<std::string, openvdb::GridBase::ConstPtr> byName_;
 };
 
-// A voxlight transform: a uniform scale by h, then a translation (voxel_scene.h). Gives h
-// and the translation.
-double requireVoxlightTransform(const openvdb::GridBase& grid, const std::string& path, glm::dvec3& translation) {
+// A voxlight transform: a uniform scale by h, a rotation (the scene's frame), then a
+// translation (voxel_scene.h). Gives h, the rotation and the translation.
+double requireVoxlightTransform(const openvdb::GridBase& grid, const std::string& path, glm::dvec3& translation,
+                                glm::dmat3& frame) {
     const auto& transform = grid.constTransform();
-    const openvdb::Vec3d size = transform.voxelSize();
-    const openvdb::Vec3d origin = transform.indexToWorld(openvdb::Vec3d(0.0));
-    const openvdb::Vec3d unit = transform.indexToWorld(openvdb::Vec3d(1.0, 1.0, 1.0)) - origin;
-    const bool axisAligned = std::abs(unit[0] - size[0]) <= 1e-9 * size[0] &&
-                             std::abs(unit[1] - size[0]) <= 1e-9 * size[0] && std::abs(unit[2] - size[0]) <= 1e-9 * size[0];
-    if (!transform.isLinear() || !transform.hasUniformScale() || !(size[0] > 0.0) || !axisAligned ||
-        !std::isfinite(origin[0]) || !std::isfinite(origin[1]) || !std::isfinite(origin[2]))
+    bool rigid = transform.isLinear();
+    // The map's matrix, not differences of mapped points: those lose h's last bits far from
+    // the world origin. Row vectors: world = index · m.
+    const openvdb::Mat4d m = rigid ? transform.baseMap()->getAffineMap()->getMat4() : openvdb::Mat4d::identity();
+    glm::dvec3 axes[3];
+    for (int a = 0; a < 3; ++a) axes[a] = glm::dvec3(m[a][0], m[a][1], m[a][2]);
+    const openvdb::Vec3d origin(m[3][0], m[3][1], m[3][2]);
+    const double h = glm::length(axes[0]);
+    rigid = rigid && h > 0.0 && std::isfinite(h) && std::isfinite(origin[0]) && std::isfinite(origin[1]) &&
+            std::isfinite(origin[2]);
+    for (int a = 0; a < 3 && rigid; ++a)
+        for (int b = 0; b < 3; ++b)
+            rigid = rigid && std::abs(glm::dot(axes[a], axes[b]) / (h * h) - (a == b ? 1.0 : 0.0)) <= 1e-9;
+    if (rigid) rigid = glm::dot(glm::cross(axes[0], axes[1]), axes[2]) > 0.0;
+    if (!rigid)
         throw InputError(path + ": grid '" + grid.getName() +
-                         "' does not have an axis-aligned uniform scale with a translation (voxlight's convention)");
+                         "' does not have a uniform scale, a rotation and a translation (voxlight's convention)");
     translation = glm::dvec3(origin[0], origin[1], origin[2]);
-    return size[0];
+    frame = glm::dmat3(axes[0] / h, axes[1] / h, axes[2] / h);
+    return h;
+}
+
+// The transform requireVoxlightTransform reads: a scale-translate map where the frame is the
+// world's axes (as every file before frames), else an affine map.
+openvdb::math::Transform::Ptr voxlightTransform(double h, const glm::dmat3& frame, const glm::dvec3& translation) {
+    if (frame == glm::dmat3(1.0)) {
+        auto transform = openvdb::math::Transform::createLinearTransform(h);
+        transform->postTranslate(openvdb::Vec3d(translation.x, translation.y, translation.z));
+        return transform;
+    }
+    openvdb::Mat4d m = openvdb::Mat4d::identity();  // row vectors: world = index · m
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) m[i][j] = h * frame[i][j];
+        m[3][i] = translation[i];
+    }
+    return openvdb::math::Transform::createLinearTransform(m);
 }
 
 std::string stringMeta(const openvdb::MetaMap& meta, const char* key) {
@@ -375,8 +401,7 @@ void writeVoxelFile(const VoxelScene& voxels, const std::string& path, const std
                                    grid_names::radiance,  grid_names::axisWeightsPos, grid_names::axisWeightsNeg};
     for (const ExtraGrid& grid : extra) validateExtra(grid, names);
 
-    const auto transform = openvdb::math::Transform::createLinearTransform(voxels.voxelSize);
-    transform->postTranslate(openvdb::Vec3d(voxels.origin.x, voxels.origin.y, voxels.origin.z));
+    const auto transform = voxlightTransform(voxels.voxelSize, voxels.frame, voxels.origin);
     const auto& coords = voxels.coords;
     // Each grid is built on its own task (an accessor fills one grid serially), in file order.
     std::vector<std::function<openvdb::GridBase::Ptr()>> builders;
@@ -432,8 +457,7 @@ void writeVoxelFile(const VoxelScene& voxels, const std::string& path, const std
     });
     for (const ExtraGrid& e : extra)
         builders.push_back([&e]() -> openvdb::GridBase::Ptr {
-            const auto extraTransform = openvdb::math::Transform::createLinearTransform(e.voxelSize);
-            extraTransform->postTranslate(openvdb::Vec3d(e.translation.x, e.translation.y, e.translation.z));
+            const auto extraTransform = voxlightTransform(e.voxelSize, e.frame, e.translation);
             if (e.isVector())
                 return channelGrid<openvdb::Vec3SGrid>(e.name, extraTransform, e.coords,
                                                        [&](size_t i) { return toVdb(e.vectors[i]); });
@@ -480,24 +504,28 @@ VoxelScene readVoxelFile(const std::string& path) {
     const auto axisNeg = set.get<Vec3SGrid>(grid_names::axisWeightsNeg, true, "vec3s");
 
     VoxelScene voxels;
-    voxels.voxelSize = requireVoxlightTransform(*opacity, path, voxels.origin);
+    voxels.voxelSize = requireVoxlightTransform(*opacity, path, voxels.origin, voxels.frame);
     const std::vector<const openvdb::GridBase*> all = {albedo.get(),   normal.get(),    emission.get(),
                                                        opacity.get(),  occlusion.get(), solid.get(),
                                                        radiance.get(), axisPos.get(),   axisNeg.get()};
     for (const openvdb::GridBase* grid : all) {
         if (!grid) continue;
         glm::dvec3 translation;
-        if (requireVoxlightTransform(*grid, path, translation) != voxels.voxelSize)
+        glm::dmat3 frame;
+        if (requireVoxlightTransform(*grid, path, translation, frame) != voxels.voxelSize)
             throw InputError(path + ": grid '" + grid->getName() + "' has voxel size " +
                              std::to_string(grid->constTransform().voxelSize()[0]) + ", grid 'opacity' has " +
                              std::to_string(voxels.voxelSize));
-        if (translation != voxels.origin)
-            throw InputError(path + ": grid '" + grid->getName() + "' is translated otherwise than grid 'opacity'");
+        if (translation != voxels.origin || frame != voxels.frame)
+            throw InputError(path + ": grid '" + grid->getName() + "' is placed otherwise than grid 'opacity'");
     }
-    if (auto size = set.metadata().getMetadata<openvdb::DoubleMetadata>(kMetaVoxelSize);
-        size && size->value() != voxels.voxelSize)
-        throw InputError(path + ": file metadata voxel_size " + std::to_string(size->value()) +
-                         " disagrees with the grids' transform (" + std::to_string(voxels.voxelSize) + ")");
+    // A turned frame's h is the length of a matrix row: exact only up to rounding.
+    if (auto size = set.metadata().getMetadata<openvdb::DoubleMetadata>(kMetaVoxelSize)) {
+        if (!(std::abs(size->value() - voxels.voxelSize) <= 1e-12 * voxels.voxelSize))
+            throw InputError(path + ": file metadata voxel_size " + std::to_string(size->value()) +
+                             " disagrees with the grids' transform (" + std::to_string(voxels.voxelSize) + ")");
+        voxels.voxelSize = size->value();
+    }
     voxels.settings = stringMeta(set.metadata(), kMetaSettings);
     voxels.sourceScene = stringMeta(set.metadata(), kMetaSourceScene);
 
@@ -559,7 +587,7 @@ ExtraGrid readExtraGrid(const std::string& path, const std::string& gridName) {
     const openvdb::GridBase::Ptr base = vdb_detail::readGrid(path, gridName);
     ExtraGrid out;
     out.name = gridName;
-    out.voxelSize = requireVoxlightTransform(*base, path, out.translation);
+    out.voxelSize = requireVoxlightTransform(*base, path, out.translation, out.frame);
     if (auto scalar = openvdb::gridConstPtrCast<openvdb::FloatGrid>(base)) {
         out.coords = sortedActiveCoords(*scalar, path);
         out.scalars.resize(out.coords.size());

@@ -2,8 +2,8 @@
 // them as they are: albedo, normal, emission, opacity, occlusion, solid, radiance, plus the
 // six signed-axis normal weights as axis_weights_pos (+X, +Y, +Z) and axis_weights_neg
 // (−X, −Y, −Z). All of them share one linear transform of voxel size h with OpenVDB's index
-// convention (voxel (i, j, k) centred at (i, j, k)·h) translated by the scene's origin, so
-// the grids sit where the scene sits in world space. Every channel grid is active exactly
+// convention (voxel (i, j, k) centred at (i, j, k)·h), turned by the scene's frame and
+// translated by its origin, so the grids sit where the scene sits in world space. Every channel grid is active exactly
 // at VoxelScene::coords; `solid` is a marker, active only where a voxel is solid. Optional
 // channels (emission, occlusion, radiance) are written only when present.
 //
@@ -29,6 +29,7 @@ struct ExtraGrid {
     std::vector<float> scalars;  // written as a FloatGrid
     std::vector<vec3> vectors;   // written as a Vec3SGrid
     glm::dvec3 translation{0.0};  // world position of voxel (0, 0, 0)'s centre
+    glm::dmat3 frame{1.0};        // its axes in world space (VoxelScene::frame)
 
     // An empty grid (no coords) is written as a FloatGrid.
     bool isVector() const { return !vectors.empty(); }
@@ -52,10 +53,10 @@ inline constexpr const char* axisWeightsNeg = "axis_weights_neg";
 // clashes with another, or a failed write (naming the file).
 void writeVoxelFile(const VoxelScene& voxels, const std::string& path, const std::vector<ExtraGrid>& extra = {});
 
-// Reads a file written by writeVoxelFile (VoxelScene::origin from the grids' translation).
+// Reads a file written by writeVoxelFile (VoxelScene::origin and frame from the grids' transform).
 // InputError naming the file (and the grid) when the file is missing or not a VDB, a
-// required grid is missing or of the wrong type, or the grids disagree on voxel size,
-// translation or active voxels. Grids other than ours are ignored.
+// required grid is missing or of the wrong type, a transform is not a uniform scale, a
+// rotation and a translation, or the grids disagree on voxel size, transform or active voxels. Grids other than ours are ignored.
 VoxelScene readVoxelFile(const std::string& path);
 
 // Reads one float or Vec3f grid by name (e.g. an ExtraGrid written beside the scene).

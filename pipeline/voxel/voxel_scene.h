@@ -5,7 +5,8 @@
 //
 // Index space follows OpenVDB: voxel (i, j, k) is centred at (i, j, k)·h in the scene's local
 // frame (scene.h) and spans [(i−½)h, (i+½)h] on each axis; in world space at origin +
-// (i, j, k)·h (the .vdb transform: a scale by h, then a translation by origin).
+// frame·(i, j, k)·h (the .vdb transform: a scale by h, the frame's rotation, then a
+// translation by origin).
 #pragma once
 
 #include "core/hostdev.h"
@@ -34,6 +35,7 @@ struct VoxelSettings {
 struct VoxelScene {
     double voxelSize = 0.0;
     glm::dvec3 origin{0.0};   // world position of the local frame's origin (Scene::origin)
+    glm::dmat3 frame{1.0};    // the local frame's axes in world space (Scene::frame)
     std::string sourceScene;  // path of the glTF it came from
     std::string settings;     // human-readable settings, stored as file metadata
 

@@ -1,6 +1,7 @@
 #include "voxel/voxelize.h"
 
 #include "core/error.h"
+#include "scene/own_frame.h"
 #include "scene/surface.h"
 #include "voxel/triangle_box.h"
 
@@ -375,9 +376,10 @@ size_t mergeInside(VoxelScene& voxels, const std::vector<InsideVoxel>& inside, c
 }  // namespace
 
 void anchorToVoxelGrid(Scene& scene, double voxelSize) {
+    turnToOwnFrame(scene);
     const Aabb box = scene.bounds();
     if (box.empty()) return;
-    scene.moveOrigin(scene.origin + glm::dvec3(box.centre()) + glm::dvec3(0.5 * voxelSize));
+    scene.moveOrigin(scene.origin + scene.frame * (glm::dvec3(box.centre()) + glm::dvec3(0.5 * voxelSize)));
 }
 
 double voxelSizeFor(const Scene& scene, const VoxelSettings& settings) {
@@ -462,6 +464,7 @@ VoxelScene voxelize(const Scene& scene, const VoxelSettings& settings, Progress*
     VoxelScene out;
     out.voxelSize = h;
     out.origin = scene.origin;
+    out.frame = scene.frame;
     out.sourceScene = scene.sourcePath;
     {
         std::ostringstream text;

@@ -60,7 +60,8 @@ struct VoxelizeStats {
 // pieces); InputError for a scene without triangles or with a non-finite position.
 double voxelSizeFor(const Scene& scene, const VoxelSettings& settings);
 
-// Moves the scene's local frame (Scene::moveOrigin) so its bounding box's centre sits on the
+// Turns the scene into its own frame (scene/own_frame.h: the grid runs along its walls) and
+// moves its local frame (Scene::moveOrigin) so its bounding box's centre sits on the
 // corner shared by voxels −1 and 0 on every axis. Why: that corner is a cell corner at every
 // level of the voxel hierarchy (level k groups voxels 2^k·I … 2^k·I + 2^k − 1), so the box's
 // 90° rotations and mirror images map voxels, mips and gather cells onto themselves, and the

@@ -1,5 +1,5 @@
-// The voxel size a bake chooses from its scene (bake/voxel_size.h): the size rule, each
-// light's clearance against analytic distances, the user's settings winning, and what the
+// The voxel size a bake chooses from its scene (bake/voxel_size.h): the free paths against
+// Cauchy's mean chord, the rules, each light's clearance against analytic distances, the user's settings winning, and what the
 // clearance rule is for: a light close to a ceiling keeps its bounce light.
 #include "bake/bake.h"
 #include "bake/bake_job.h"
@@ -32,35 +32,75 @@ Scene roomWithLight(vec3 size, vec3 light) {
 
 }  // namespace
 
-TEST_CASE("The default voxel size puts kSceneVoxels voxels along the scene's longest side", "[bake]") {
-    // The light is 0.4 m from every wall: farther than a voxel, so the size rule alone decides.
+TEST_CASE("The free paths between a closed room's surfaces average 4V/S, Cauchy's mean chord", "[bake]") {
+    // Cosine-distributed rays from points uniform over a convex room's inside have the mean
+    // chord 4V/S: 2/3 of a cube's side. 4096 rays: the mean's own spread is about 0.8%.
+    struct Case {
+        vec3 size;
+    };
+    for (const Case& c : {Case{vec3(1.0f)}, Case{vec3(2.0f, 1.0f, 0.8f)}, Case{vec3(3.0f, 0.5f, 0.5f)}}) {
+        Scene scene;
+        addRoom(scene, "room/", addLambert(scene, vec3(0.6f)), vec3(0.0f), c.size);
+        const double volume = double(c.size.x) * c.size.y * c.size.z;
+        const double area = 2.0 * (double(c.size.x) * c.size.y + double(c.size.y) * c.size.z + double(c.size.z) * c.size.x);
+        const FreePaths paths = surfaceFreePaths(scene);
+        INFO("room " << c.size.x << " × " << c.size.y << " × " << c.size.z << ": mean " << paths.mean << ", 4V/S "
+                     << 4.0 * volume / area);
+        CHECK(paths.rays == 4096);
+        CHECK(paths.hits == paths.rays);  // closed: nothing leaves
+        CHECK(paths.singleSidedBacks == 0);
+        CHECK(paths.mean == Approx(4.0 * volume / area).epsilon(0.025));
+        CHECK(paths.median < paths.mean * 1.2);
+    }
+}
+
+TEST_CASE("The default voxel size puts kVoxelsPerFreePath voxels along the mean free path", "[bake]") {
+    // The light is 0.4 m from every wall: farther than a voxel, so the free path alone decides.
     const Scene scene = roomWithLight(vec3(2.0f, 1.0f, 0.8f), vec3(1.0f, 0.5f, 0.4f));
     const VoxelSizeChoice choice = chooseVoxelSize(scene, quietSettings());
-    CHECK(choice.voxelSize == Approx(2.0 / kSceneVoxels).epsilon(1e-6));
-    CHECK(choice.voxelsAlongLongest == kSceneVoxels);
-    CHECK_THAT(choice.setBy, Catch::Contains("the scene's size"));
+    const double wanted = choice.freePaths.mean / kVoxelsPerFreePath;
+    // The count along the longest side is rounded up to an odd number.
+    CHECK(choice.voxelSize <= wanted * (1.0 + 1e-9));
+    CHECK(choice.voxelSize > wanted * (1.0 - 2.0 / choice.voxelsAlongLongest));
+    CHECK(choice.voxelsAlongLongest % 2 == 1);
+    CHECK_THAT(choice.setBy, Catch::Contains("the mean free path between its surfaces"));
     CHECK(choice.warnings.empty());
 }
 
 TEST_CASE("A room turned at an angle to the world axes gets the voxel size of the room unturned", "[bake]") {
-    // Its axis-aligned bounds grow with the turn; its own longest side (2 m) does not.
-    const Scene scene = roomWithLight(vec3(2.0f, 1.0f, 0.8f), vec3(1.0f, 0.5f, 0.4f));
     const glm::mat3 turn = glm::mat3(glm::rotate(glm::mat4(1.0f), 0.5f, glm::normalize(vec3(1.0f, 2.0f, 0.5f))));
-    Scene turned = scene;
-    for (Mesh& mesh : turned.meshes) {
-        for (vec3& p : mesh.positions) p = turn * p;
-        for (vec3& n : mesh.normals) n = turn * n;
+    const auto turned = [&](Scene scene) {
+        for (Mesh& mesh : scene.meshes) {
+            for (vec3& p : mesh.positions) p = turn * p;
+            for (vec3& n : mesh.normals) n = turn * n;
+        }
+        for (Light& light : scene.lights) light.position = turn * light.position;
+        return scene;
+    };
+    SECTION("closed: the free paths do not turn") {
+        const Scene scene = roomWithLight(vec3(2.0f, 1.0f, 0.8f), vec3(1.0f, 0.5f, 0.4f));
+        const double unturned = chooseVoxelSize(scene, quietSettings()).voxelSize;
+        const VoxelSizeChoice choice = chooseVoxelSize(turned(scene), quietSettings());
+        // The rays' directions about each point turn with the room only up to its basis: the
+        // same mean within the probe's spread; the odd count rounds on longer bounds.
+        CHECK(choice.voxelSize == Approx(unturned).epsilon(0.03));
+        CHECK_THAT(choice.setBy, Catch::Contains("the mean free path"));
     }
-    turned.lights[0].position = turn * turned.lights[0].position;
-    const VoxelSizeChoice choice = chooseVoxelSize(turned, quietSettings());
-    const vec3 bounds = turned.bounds().extent();
-    INFO("turned bounds " << bounds.x << " × " << bounds.y << " × " << bounds.z);
-    REQUIRE(maxComponent(bounds) > 2.1f);
-    // The count along the longer bounds is rounded up to an odd number: the size is at most
-    // the unturned one and within one voxel of it.
-    CHECK(choice.voxelSize <= 2.0 / kSceneVoxels * (1.0 + 1e-6));
-    CHECK(choice.voxelSize > 2.0 / kSceneVoxels * (1.0 - 2.0 / choice.voxelsAlongLongest));
-    CHECK_THAT(choice.setBy, Catch::Contains("in its own frame"));
+    SECTION("open: the size rule counts along the scene's own longest side") {
+        // A 2 m × 1 m floor with a wall 0.2 m high along one long side: most rays leave.
+        Scene scene;
+        const int white = addLambert(scene, vec3(0.6f));
+        addQuad(scene, "floor", white, vec3(0.0f), vec3(0.0f, 0.0f, 1.0f), vec3(2.0f, 0.0f, 1.0f), vec3(2.0f, 0.0f, 0.0f));
+        addQuad(scene, "wall", white, vec3(0.0f), vec3(2.0f, 0.0f, 0.0f), vec3(2.0f, 0.2f, 0.0f), vec3(0.0f, 0.2f, 0.0f));
+        const VoxelSizeChoice choice = chooseVoxelSize(turned(scene), quietSettings());
+        const vec3 bounds = turned(scene).bounds().extent();
+        INFO("turned bounds " << bounds.x << " × " << bounds.y << " × " << bounds.z << "; " << choice.setBy);
+        REQUIRE(maxComponent(bounds) > 2.1f);
+        CHECK(2 * choice.freePaths.hits < choice.freePaths.rays);
+        CHECK(choice.voxelSize <= 2.0 / kSceneVoxels * (1.0 + 1e-6));
+        CHECK(choice.voxelSize > 2.0 / kSceneVoxels * (1.0 - 2.0 / choice.voxelsAlongLongest));
+        CHECK_THAT(choice.setBy, Catch::Contains("in its own frame") && Catch::Contains("an open scene"));
+    }
 }
 
 TEST_CASE("A light's clearance is its distance to the nearest triangle", "[bake]") {
@@ -92,10 +132,11 @@ TEST_CASE("A light close to a surface makes the voxels fine enough to clear it b
     CHECK_THAT(choice.setBy, Catch::Contains("light 'lamp'") && Catch::Contains("5 mm"));
     CHECK(choice.warnings.empty());
 
-    SECTION("but at most kMaxRefinement times finer than the size rule, with a warning") {
+    SECTION("but at most kMaxRefinement times finer than the free-path rule, with a warning") {
+        const int rule = chooseVoxelSize(roomWithLight(vec3(1.0f), vec3(0.5f)), quietSettings()).voxelsAlongLongest;
         const Scene onFloor = roomWithLight(vec3(1.0f), vec3(0.5f, 0.0f, 0.5f));
         const VoxelSizeChoice capped = chooseVoxelSize(onFloor, quietSettings());
-        CHECK(capped.voxelsAlongLongest == kMaxRefinement * (kSceneVoxels + 1) - 1);
+        CHECK(capped.voxelsAlongLongest == kMaxRefinement * (rule + 1) - 1);
         CHECK_THAT(capped.setBy, Catch::Contains("lies on a surface"));
         REQUIRE(capped.warnings.size() == 1);
         CHECK_THAT(capped.warnings[0], Catch::Contains("room (test)") && Catch::Contains("light 'lamp'") &&
@@ -179,9 +220,9 @@ TEST_CASE("bake.json says what set the voxel size and how far each light is from
     REQUIRE(report.ok);
     std::ifstream file(out / "bake.json");
     const std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-    const std::string count = std::to_string(kSceneVoxels);
-    CHECK_THAT(text, Catch::Contains("\"voxel_size_set_by\": \"the scene's size (" + count + " voxels along its longest side") &&
-                         Catch::Contains("\"voxels_along_longest_side\": " + count) &&
+    CHECK_THAT(text, Catch::Contains("\"voxel_size_set_by\": \"the mean free path between its surfaces (" +
+                                         std::to_string(int(kVoxelsPerFreePath)) + " voxels along") &&
+                         Catch::Contains("\"voxels_along_longest_side\": ") && Catch::Contains("\"free_paths\"") &&
                          Catch::Contains("\"light_clearances\"") && Catch::Contains("\"settings\": \"resolution=auto"));
     fs::remove_all(out);
 }

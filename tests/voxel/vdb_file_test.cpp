@@ -112,6 +112,37 @@ TEST_CASE("A VoxelScene written to .vdb reads back bit for bit", "[voxel]") {
     CHECK(axisMismatches == 0);
 }
 
+TEST_CASE("A turned scene's grids carry its frame and origin, and read back with them", "[voxel]") {
+    // The bake turns a scene into its own frame (scene/own_frame.h): the grids' transform
+    // turns them back, so another tool shows the voxels where the scene is.
+    VoxelScene scene = syntheticScene(false);
+    const double c = std::cos(0.6), s = std::sin(0.6);
+    scene.frame = glm::dmat3(c, s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0);  // 0.6 rad about +Z
+    scene.origin = glm::dvec3(1.0e4, 2.5, -3.0);
+    const std::string path = test::tempDir("vdb_file") + "/turned.vdb";
+    ExtraGrid mip;
+    mip.name = "radiance_mip1";
+    mip.voxelSize = 2.0 * scene.voxelSize;
+    mip.coords = {ivec3(0), ivec3(1, -2, 3)};
+    mip.vectors = {vec3(1.0f), vec3(0.5f)};
+    mip.translation = scene.origin + scene.frame * glm::dvec3(0.5 * scene.voxelSize);
+    mip.frame = scene.frame;
+    writeVoxelFile(scene, path, {mip});
+    const VoxelScene back = readVoxelFile(path);
+    CHECK(back.voxelSize == scene.voxelSize);
+    CHECK(back.origin == scene.origin);
+    for (int k = 0; k < 3; ++k) CHECK(glm::distance(back.frame[k], scene.frame[k]) <= 1e-15);
+    CHECK(back.coords == scene.coords);
+    const ExtraGrid mipBack = readExtraGrid(path, "radiance_mip1");
+    CHECK(mipBack.voxelSize == Approx(mip.voxelSize).epsilon(1e-14));
+    CHECK(glm::distance(mipBack.translation, mip.translation) <= 1e-9);
+    for (int k = 0; k < 3; ++k) CHECK(glm::distance(mipBack.frame[k], mip.frame[k]) <= 1e-15);
+    // An unturned scene keeps the scale-translate transform of every file before frames.
+    const std::string plain = test::tempDir("vdb_file") + "/plain.vdb";
+    writeVoxelFile(syntheticScene(false), plain);
+    CHECK(readVoxelFile(plain).frame == glm::dmat3(1.0));
+}
+
 TEST_CASE("Writing the same scene twice gives the same bytes", "[voxel]") {
     const VoxelScene scene = syntheticScene(true);
     const std::string dir = test::tempDir("vdb_file");

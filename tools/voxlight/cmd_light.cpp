@@ -83,6 +83,7 @@ void runLight(const LightOptions& options) {
     VoxelScene voxels = readVoxelFile(options.grids);
     // Grids voxelized from this scene share its frame; others (another tool's, another
     // version's) are lit in theirs.
+    if (voxels.frame != scene.frame) scene.turnFrame(voxels.frame);
     if (voxels.origin != scene.origin) scene.moveOrigin(voxels.origin);
     if (!voxels.sourceScene.empty() &&
         std::filesystem::path(voxels.sourceScene).filename() != std::filesystem::path(options.scene).filename()) {
