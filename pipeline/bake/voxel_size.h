@@ -3,18 +3,21 @@
 // accuracy issue asks of the bake (README "A voxel size the scene needs").
 //
 // Features, each measured by what it does to the bake as the voxels coarsen:
-//  * the scene's size: kSceneVoxels voxels along its longest side, measured in its own frame
-//    (the axes of its most common surface orientations) so a scene modelled at an angle to
-//    the world axes gets the voxels it would get unturned. 111: the coarsest count at which
-//    the Cycles quad box's lightmap meets issue 13's 3% against Cycles at each of sixteen
-//    turns (2.41–2.84%; 103 voxels: 3.13%, 95: 3.26%; build/accuracy/accuracy_rotations,
-//    2026-11-27). By error² × time alone 63–95 voxels are cheaper on both Cornell boxes (111
-//    is 1.18 / 1.17× the best lightmap point, `voxlight bench`, 2026-11-27), and 127 on the
-//    two rooms (111: 1.19×), whose error is not a smooth function of the voxel size
-//    (2.63–3.41% over 101–133 voxels). 63 was the rule while the gathers went by cones, whose
-//    error did not fall with finer voxels (quad 4.9% at 63, 5.9% at 111). Tried and not
-//    taken: 6 voxels along the median free path between surfaces (103 on zdm2: 28.0% image
-//    error against 31.3% at 63, by cones, but 1.2× the error² × time).
+//  * how far light goes between the scene's surfaces: kVoxelsPerFreePath voxels along the
+//    mean free path of cosine rays from its surfaces (surfaceFreePaths). The indirect
+//    light's detail follows the distances it crosses between bounces, not the scene's extent:
+//    the Cycles Cornell boxes (mean free path 27.7 / 27.4 cm, 55.9 cm long) and the two rooms
+//    (1.88 m, 6.1 m long) have their best error² × time at 63 and 103–127 voxels along their
+//    longest sides, 31–35 along their free paths (`voxlight bench`, gather level 2,
+//    2026-11-27). The count along the scene's own longest side is rounded to fit the gather
+//    cells (cellAlignedCount in voxel_size.cpp).
+//  * the scene's size, where no free path applies: kSceneVoxels along its longest side, in
+//    its own frame, for an open scene (most of its surfaces' rays leave it: zdm2, the window
+//    room) and for one that gathers by cones, whose error does not fall with finer voxels
+//    (zdm2 by cones: 21.8 / 36.9 / 25.2 / 19.3% image error at 95 / 111 / 127 / 159 voxels).
+//    Until 2026-11-27 this rule alone set every scene's size, at 111 voxels and gather
+//    level 3: the coarsest count that held the turned Cycles boxes within 3% while the grid
+//    stayed on the world axes (scene/own_frame.h).
 //  * each point or spot light's clearance, its distance to the nearest surface: a light less
 //    than about half a voxel from a surface falls into that surface's voxel layer and loses
 //    most of the light it gives the bounces (a point light 0.32 voxel under a ceiling: −21% of
@@ -22,16 +25,17 @@
 //    own +1…+7%). The voxels are made fine enough that every light clears one voxel.
 //  * the memory budget: never finer than what fits in the memory available
 //    (bake.h checkMemoryBudget's estimate), and never more than kMaxRefinement times finer
-//    than the size rule, so a light placed on a surface cannot make a bake of billions of
+//    than the rules above, so a light placed on a surface cannot make a bake of billions of
 //    voxels; either limit is a warning naming the light it leaves unresolved.
 // Measured not to need voxels, so they do not set the size: walls thinner than a voxel (the
 // dark one of two sealed rooms keeps at most 0.30% of the lit one's light, at a wall half a
-// voxel thick: each side of a wall gathers and reflects on its own) and emissive surfaces of
+// voxel thick: each side of a wall gathers and reflects on its own), emissive surfaces of
 // any size or distance from a surface (their light is integrated over their triangles
 // exactly: a 1 cm emitter kept its first bounce within the coarse grid's own bias down to 16
-// voxels across its room). Nor, by construction, the lightmap's texel size: the direct light
-// is exact per texel and the indirect light is gathered on 8-voxel cells whatever the texels
-// (not measured against a finer reference: the Cycles references are 256² only).
+// voxels across its room) and, since the grid turns with the scene, its orientation. Nor, by
+// construction, the lightmap's texel size: the direct light is exact per texel and the
+// indirect light is gathered on 4-voxel cells whatever the texels (not measured against a
+// finer reference: the Cycles references are 256² only).
 #pragma once
 
 #include "bake/bake_settings.h"
@@ -43,7 +47,7 @@
 namespace vl {
 
 constexpr double kVoxelsPerFreePath = 31.0;  // the free-path rule
-constexpr int kSceneVoxels = 95;      // the size rule where no free path applies: an odd count
+constexpr int kSceneVoxels = 95;      // the size rule where no free path applies (8k − 1)
 constexpr int kMaxRefinement = 8;     // the lights' rule goes at most this much finer
 
 // How far light goes between the scene's surfaces: `rays` cosine-distributed rays from points
@@ -65,7 +69,7 @@ struct LightClearance {
 
 struct VoxelSizeChoice {
     double voxelSize = 0.0;      // metres
-    int voxelsAlongLongest = 0;  // the scene's longest side in voxels (odd)
+    int voxelsAlongLongest = 0;  // the axis-aligned box's longest side in voxels (rounded)
     std::string setBy;           // what set it, in words: "the scene's size", "light 'lamp' …"
     FreePaths freePaths;                     // the probe (rays == 0 where the user set the size)
     std::vector<LightClearance> clearances;  // every point and spot light, nearest first

@@ -183,14 +183,15 @@ std::vector<BenchPointSpec> benchSweep(bool full) {
         each("cones", {"6", "16"});
         each("normal-weights", {"lambert", "villegas"});
         each("bounces", {"0", "2", "4"});
-        each("gather-level", {"-1", "2"});  // -1: every receiver sample gathers its own cones (slower)
-        each("bounce-gather-level", {"2"});
+        each("gather-level", {"-1", "3"});  // -1: every receiver sample gathers its own cones (slower)
+        each("bounce-gather-level", {"3"});
         each("voxel-emitter-strata", {"2"});
     } else {
-        each("resolution", {"64", "96", "160"});
+        each("resolution", {"80", "96", "160"});
         each("gather-visibility", {"cones"});
         vct("rays=12", {{"bounce-rays", "12"}, {"gather-rays", "12"}});  // 12 x 12 rays at every gather
-        each("gather-level", {"2"});
+        // The default before the voxel size followed the free paths (bake/voxel_size.h).
+        vct("resolution=112 gather-level=3", {{"resolution", "112"}, {"gather-level", "3"}, {"bounce-gather-level", "3"}});
         each("bounces", {"2"});
     }
     // The fast end.

@@ -90,8 +90,10 @@ TEST_CASE("The default bake of the Cycles Cornell boxes matches Cycles' lightmap
     VL_SKIP_WITHOUT_SHARED();
     const std::string dir = sharedDir() + "/reference/";
     // Issue 13's bounds: lightmap total, indirect and camera image relative RMSE. Measured
-    // (2026-11-27, 111 voxels, gathering by rays, quads sampled whole): quad 2.59% / 5.21% /
-    // 4.13% (direct 1.57%), point 2.66% / 5.33% / 3.63%.
+    // (2026-11-27, 63 voxels from the free paths, gather level 2, gathering by rays): quad
+    // 2.70% / 5.20% / 4.40% (direct 1.88%), point 2.69% / 5.35% / 3.97% (direct 1.09%); at 111
+    // voxels and gather level 3, the default before: 2.48% / 4.70% / 4.13%, 2.53% / 5.03% /
+    // 3.68%.
     struct Bounds {
         const char* name;
         double total, indirect, image;
