@@ -11,6 +11,7 @@
 #include "core/progress.h"
 #include "cuda/launchers.h"
 #include "lighting/lighting.h"
+#include "scene/own_frame.h"
 #include "trace/bvh.h"
 #include "trace/camera.h"
 #include "trace/trace_scene.h"
@@ -181,6 +182,9 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
     validateBakeSettings(settings);
     VoxelStages stages;
     BakeResult& result = stages.result;
+    // Into its own frame before anything is sized: a resolution, the free paths' count and
+    // the gather cells' alignment are then along the grid's axes.
+    if (settings.voxel.ownFrame) turnToOwnFrame(scene);
     result.voxelSizeChoice = timed(result.stages, "voxel size", [&] { return chooseVoxelSize(scene, settings); });
     const VoxelSizeChoice& choice = result.voxelSizeChoice;
     VoxelSettings voxelSettings = settings.voxel;
@@ -340,7 +344,19 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
 std::vector<Camera> bakeCameras(const Scene& scene, const BakeSettings& settings) {
     std::vector<Camera> cameras = scene.cameras;
     const float aspect = static_cast<float>(settings.imageWidth) / static_cast<float>(settings.imageHeight);
-    if (cameras.empty()) cameras.push_back(defaultCamera(scene.bounds(), aspect));
+    if (cameras.empty()) {
+        // Framed in the world's orientation, as `voxlight reference` and the bench frame it:
+        // the bake has turned the scene into its own frame (scene/own_frame.h).
+        const glm::mat3 toWorld(scene.frame), toLocal = glm::transpose(toWorld);
+        Aabb box;
+        for (const Mesh& mesh : scene.meshes)
+            for (const vec3& p : mesh.positions) box.extend(toWorld * p);
+        Camera camera = defaultCamera(box, aspect);
+        camera.position = toLocal * camera.position;
+        camera.forward = toLocal * camera.forward;
+        camera.up = toLocal * camera.up;
+        cameras.push_back(camera);
+    }
     return cameras;
 }
 

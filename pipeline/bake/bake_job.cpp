@@ -311,13 +311,18 @@ void printBakeSummary(const std::vector<BakeReport>& reports) {
 
 void addJobLightsAndCameras(const BakeJob& job, Scene& scene) {
     // A job file places them in world space; the scene works in its local frame (scene.h).
-    const auto toLocal = [&](const vec3& world) { return vec3(glm::dvec3(world) - scene.origin); };
+    const glm::dmat3 toLocalAxes = glm::transpose(scene.frame);
+    const auto toLocal = [&](const vec3& world) { return vec3(toLocalAxes * (glm::dvec3(world) - scene.origin)); };
+    const auto turn = [&](const vec3& direction) { return vec3(toLocalAxes * glm::dvec3(direction)); };
     for (Light light : job.addedLights) {
         light.position = toLocal(light.position);
+        light.direction = turn(light.direction);
         scene.lights.push_back(light);
     }
     for (Camera camera : job.addedCameras) {
         camera.position = toLocal(camera.position);
+        camera.forward = turn(camera.forward);
+        camera.up = turn(camera.up);
         scene.cameras.push_back(camera);
     }
     applySkySettings(job.settings, scene);

@@ -29,6 +29,12 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.voxel.voxelSize = parseRealSetting("voxel-size", v, 1e-9, 1e9); }},
         {"fill-interior", "mark voxels inside closed meshes solid (default false)",
          [](S& s, const std::string& v) { s.voxel.fillInterior = parseBoolSetting("fill-interior", v); }},
+        {"grid-frame", "the voxel grid's axes: own (along the scene's walls, its own frame) or world (default own)",
+         [](S& s, const std::string& v) {
+             if (v != "own" && v != "world")
+                 throw SettingsError("setting grid-frame = '" + v + "' is not one of own, world");
+             s.voxel.ownFrame = v == "own";
+         }},
         {"texel-samples", "texture samples per axis over each voxel's surface piece (default 4)",
          [](S& s, const std::string& v) { s.voxel.texelSamples = parseIntSetting("texel-samples", v, 1, 64); }},
         // Voxel direct lighting
@@ -213,6 +219,7 @@ std::string describeBakeSettings(const BakeSettings& s) {
     if (s.device != cuda::DeviceChoice::Cpu) out << ", device=" << cuda::toString(s.device);
     if (!s.generateLightmapUvs) out << ", lightmap-uvs=false";
     if (s.filesOutsideScene) out << ", files-outside-scene=true";
+    if (!s.voxel.ownFrame) out << ", grid-frame=world";
     for (size_t g = 0; g < s.lightmap.atlases.size(); ++g) {
         const AtlasGroup& group = s.lightmap.atlases[g];
         out << (g == 0 ? ", atlases=" : "; ") << group.name << ":";

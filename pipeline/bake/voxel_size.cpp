@@ -214,8 +214,9 @@ VoxelSizeChoice chooseVoxelSize(const Scene& scene, const BakeSettings& settings
         choice.setBy = settings.voxel.voxelSize > 0.0 ? "the voxel-size setting" : "the resolution setting";
     } else {
         const FreePaths& paths = choice.freePaths = surfaceFreePaths(scene);
-        const bool byCones = settings.gatherVisibility == GatherVisibility::Cones ||
-                             (settings.gatherVisibility == GatherVisibility::Auto && paths.backShare() > kBackShareLimit);
+        // Only a user's choice of cones is known here: auto decides on the gather points, which
+        // the voxel size places (ray_gather.h chooseGatherVisibility).
+        const bool byCones = settings.gatherVisibility == GatherVisibility::Cones;
         // Counts along the scene's own longest side: the bake turns the scene into its own
         // frame (voxelize.h anchorToVoxelGrid), and that side is then along a grid axis.
         const double ownLongest = ownFrameLongestSide(scene, longest);
@@ -224,7 +225,13 @@ VoxelSizeChoice chooseVoxelSize(const Scene& scene, const BakeSettings& settings
         int ownVoxels = 0;
         char text[320];
         if (!byCones && 2 * paths.hits >= paths.rays) {
-            ownVoxels = cellAlignedCount(ownLongest / (paths.mean / kVoxelsPerFreePath), cellVoxels);
+            const double wanted = ownLongest / (paths.mean / kVoxelsPerFreePath);
+            ownVoxels = cellAlignedCount(std::min(wanted, double(kMaxFreePathVoxels)), cellVoxels);
+            if (wanted > kMaxFreePathVoxels)
+                choice.warnings.push_back(scene.sourcePath + ": the free paths between its surfaces (mean " +
+                                          lengthText(paths.mean) + ") ask for " + std::to_string(int(wanted)) +
+                                          " voxels along its longest side; the bake takes " +
+                                          std::to_string(ownVoxels) + " (give voxel-size for finer)");
             std::snprintf(text, sizeof text,
                           "the mean free path between its surfaces (%g voxels along %s, over the %.0f%% of %d rays that "
                           "hit; %d along its longest side, %s%s)",
@@ -234,7 +241,7 @@ VoxelSizeChoice chooseVoxelSize(const Scene& scene, const BakeSettings& settings
             ownVoxels = cellAlignedCount(kSceneVoxels, cellVoxels);
             std::snprintf(text, sizeof text, "the scene's size (%d voxels along its longest side, %s%s; %s)", ownVoxels,
                           lengthText(ownLongest).c_str(), turned ? ", in its own frame" : "",
-                          byCones ? "it gathers by cones, whose error does not fall with finer voxels"
+                          byCones ? "gather-visibility=cones, whose error does not fall with finer voxels"
                                   : "most rays from its surfaces leave it: an open scene");
         }
         choice.setBy = text;

@@ -10,11 +10,13 @@
 //    (1.88 m, 6.1 m long) have their best error² × time at 63 and 103–127 voxels along their
 //    longest sides, 31–35 along their free paths (`voxlight bench`, gather level 2,
 //    2026-11-27). The count along the scene's own longest side is rounded to fit the gather
-//    cells (cellAlignedCount in voxel_size.cpp).
+//    cells (cellAlignedCount in voxel_size.cpp), at most kMaxFreePathVoxels (a warning).
 //  * the scene's size, where no free path applies: kSceneVoxels along its longest side, in
 //    its own frame, for an open scene (most of its surfaces' rays leave it: zdm2, the window
-//    room) and for one that gathers by cones, whose error does not fall with finer voxels
-//    (zdm2 by cones: 21.8 / 36.9 / 25.2 / 19.3% image error at 95 / 111 / 127 / 159 voxels).
+//    room) and for a bake told to gather by cones (gather-visibility=cones), whose error does
+//    not fall with finer voxels (zdm2 by cones: 21.8 / 36.9 / 25.2 / 19.3% image error at 95
+//    / 111 / 127 / 159 voxels). Where auto picks cones (on the gather points, which need the
+//    voxel size first) the free-path rule stands.
 //    Until 2026-11-27 this rule alone set every scene's size, at 111 voxels and gather
 //    level 3: the coarsest count that held the turned Cycles boxes within 3% while the grid
 //    stayed on the world axes (scene/own_frame.h).
@@ -49,6 +51,9 @@ namespace vl {
 constexpr double kVoxelsPerFreePath = 31.0;  // the free-path rule
 constexpr int kSceneVoxels = 95;      // the size rule where no free path applies (8k − 1)
 constexpr int kMaxRefinement = 8;     // the lights' rule goes at most this much finer
+// The free-path rule's most voxels along the longest side: a scene of narrow gaps (dense
+// furniture, foliage) would ask for a grid no bake of its size needs.
+constexpr int kMaxFreePathVoxels = kMaxRefinement * (kSceneVoxels + 1) - 1;  // 767
 
 // How far light goes between the scene's surfaces: `rays` cosine-distributed rays from points
 // spread uniformly over its surface area (fixed seed), each from the front of its triangle.

@@ -3,6 +3,7 @@
 #include "cluster/unit_file.h"
 #include "cluster/voxel_state.h"
 #include "core/error.h"
+#include "scene/own_frame.h"
 #include "voxel/voxelize.h"
 
 #include <nlohmann/json.hpp>
@@ -161,6 +162,7 @@ SceneUnits planSceneUnits(const BakeJob& job, int bands, int cameras) {
     // The atlases as the bake will make them: the scene anchored at its voxel size and given
     // its generated lightmap UVs (zdm2: 256² asked, 1024² needed), the same floats as the bake's.
     VoxelSettings voxel = s.voxel;
+    if (voxel.ownFrame) turnToOwnFrame(scene);
     voxel.voxelSize = chooseVoxelSize(scene, s).voxelSize;
     anchorToVoxelGrid(scene, voxelSizeFor(scene, voxel));
     Diagnostics quiet(false, false);

@@ -112,6 +112,9 @@ VoxelState readVoxelState(const std::string& path) {
     if (h.value("kind", "") != "voxel state") throw InputError(path + ": not a voxel state");
     if (h.value("tool_version", "") != VOXLIGHT_VERSION)
         throw InputError(path + ": written by voxlight " + h.value("tool_version", "?") + ", this is " + VOXLIGHT_VERSION);
+    if (!h.contains("frame") || !h.contains("choice") || !h.at("choice").contains("free_paths"))
+        throw InputError(path + ": written by a build of voxlight " + VOXLIGHT_VERSION +
+                         " from before the grid turned with the scene (no frame): bake its voxel unit again");
     VoxelState state;
     BakeResult& r = state.result;
     VoxelScene& v = r.voxels;
@@ -191,7 +194,12 @@ VoxelState readVoxelState(const std::string& path) {
 
 Scene receiverScene(Scene loaded, const VoxelState& state) {
     Scene scene = std::move(loaded);
-    anchorToVoxelGrid(scene, state.result.voxels.voxelSize);
+    // The voxel unit's turn, to the last bit (the state keeps doubles), then its anchor.
+    const VoxelScene& voxels = state.result.voxels;
+    if (voxels.frame != scene.frame) scene.turnFrame(voxels.frame);
+    anchorToVoxelGrid(scene, voxels.voxelSize);
+    if (scene.origin != voxels.origin)
+        throw InputError(scene.sourcePath + ": lies otherwise than in the voxel unit's state: the scene changed");
     const std::vector<GeneratedLayout>& layouts = state.result.generatedLayouts;
     if (!layouts.empty() && layouts.size() != scene.meshes.size())
         throw InputError(scene.sourcePath + ": has " + std::to_string(scene.meshes.size()) +

@@ -86,7 +86,8 @@ glm::dmat3 ownFrameAxes(const Scene& scene) {
         lastAxis = bestAxis;
         axes[bestAxis] = own[bestOwn][bestAxis] < 0.0 ? -own[bestOwn] : own[bestOwn];
     }
-    // A tie at 45° can leave the three signed axes left-handed: the least decided one turns.
+    // An odd permutation of the axes leaves the three signed axes left-handed: the least
+    // decided one turns.
     if (glm::determinant(axes) < 0.0) axes[lastAxis] = -axes[lastAxis];
     // The turn's angle: cos θ = (trace − 1) / 2.
     const double cosTurn = 0.5 * (axes[0][0] + axes[1][1] + axes[2][2] - 1.0);

@@ -1,8 +1,9 @@
 // A scene's own frame: the axes of its two most common surface orientations (area-weighted; a
 // normal and its opposite are one orientation) and their cross product, each taken as the
 // signed local axis it lies nearest. A room modelled at an angle to the world axes has its
-// walls along its own axes; the bake turns the scene into them before it voxelizes
-// (voxelize.h anchorToVoxelGrid), so the voxel grid runs along the walls whatever the turn.
+// walls along its own axes; the bake turns the scene into them before it sizes and voxelizes
+// it (bake.h; VoxelSettings::ownFrame, the setting grid-frame), so the voxel grid runs along
+// the walls whatever the turn.
 //
 // Why: walls at an angle to the grid cross its voxels in staircases, and the voxel bake's
 // error against Cycles depends on that alignment. Over sixteen random turns of the Cycles

@@ -169,7 +169,7 @@ std::shared_ptr<const SkyImage> loadSkyImage(const std::string& path);
 // Positions, directions and lengths are in metres in the scene's local frame: world =
 // origin + frame · local, origin the centre of the geometry's bounding box, found in double
 // precision before anything is rounded to float, frame a rotation (the identity until a bake
-// turns the scene into its own frame: voxelize.h anchorToVoxelGrid). Why: float holds a
+// turns the scene into its own frame: scene/own_frame.h). Why: float holds a
 // position 10 km from the world origin to 1 mm, and voxels anchored at the world origin fell
 // at other offsets inside their walls when the scene moved; in the local frame a translated
 // scene is the same floats, and a turned one the same up to rounding.

@@ -29,6 +29,7 @@ struct VoxelSettings {
     double voxelSize = 0.0;   // metres; 0 = derive from resolution
     int resolution = 128;     // voxels along the scene's longest axis when voxelSize is 0 (an even count less one)
     bool fillInterior = false;  // also mark voxels inside closed meshes solid
+    bool ownFrame = true;       // the grid along the scene's own axes (scene/own_frame.h), not the world's
     int texelSamples = 4;     // texture samples per axis per voxel face area, over each triangle piece (albedo, emission)
 };
 

@@ -1,7 +1,6 @@
 #include "voxel/voxelize.h"
 
 #include "core/error.h"
-#include "scene/own_frame.h"
 #include "scene/surface.h"
 #include "voxel/triangle_box.h"
 
@@ -376,7 +375,6 @@ size_t mergeInside(VoxelScene& voxels, const std::vector<InsideVoxel>& inside, c
 }  // namespace
 
 void anchorToVoxelGrid(Scene& scene, double voxelSize) {
-    turnToOwnFrame(scene);
     const Aabb box = scene.bounds();
     if (box.empty()) return;
     scene.moveOrigin(scene.origin + scene.frame * (glm::dvec3(box.centre()) + glm::dvec3(0.5 * voxelSize)));

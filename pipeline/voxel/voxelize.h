@@ -60,9 +60,9 @@ struct VoxelizeStats {
 // pieces); InputError for a scene without triangles or with a non-finite position.
 double voxelSizeFor(const Scene& scene, const VoxelSettings& settings);
 
-// Turns the scene into its own frame (scene/own_frame.h: the grid runs along its walls) and
-// moves its local frame (Scene::moveOrigin) so its bounding box's centre sits on the
-// corner shared by voxels −1 and 0 on every axis. Why: that corner is a cell corner at every
+// Moves the scene's local frame (Scene::moveOrigin) so its bounding box's centre sits on the
+// corner shared by voxels −1 and 0 on every axis. A bake turns the scene into its own frame
+// first (scene/own_frame.h, VoxelSettings::ownFrame), so the grid runs along its walls. Why: that corner is a cell corner at every
 // level of the voxel hierarchy (level k groups voxels 2^k·I … 2^k·I + 2^k − 1), so the box's
 // 90° rotations and mirror images map voxels, mips and gather cells onto themselves, and the
 // grid follows the scene, not the world origin. A bake (bake.h) anchors the scene it is

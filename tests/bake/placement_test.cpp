@@ -18,7 +18,11 @@
 #include "scene/gltf_loader.h"
 #include "support/paths.h"
 #include "support/skip.h"
+#include "voxel/voxelize.h"
+#include "quad_scene.h"
+#include "scene/own_frame.h"
 #include "trace/bvh.h"
+#include "trace/camera.h"
 #include "trace/path_tracer.h"
 #include "trace/trace_scene.h"
 
@@ -178,6 +182,9 @@ TEST_CASE("A scene turned at any angle bakes as it does unturned: the voxel grid
     for (const Placement& placement : turns) {
         const Scene scene = load(placedCopy(placement, "turned-bake", source));
         const BakeResult turned = bake(scene, settings, diagnostics);
+        // The loader placed the box turned, and the bake turned the grid with it.
+        CHECK(maxComponent(scene.bounds().extent()) > 1.2f * maxComponent(load(source.string()).bounds().extent()));
+        CHECK(turned.voxels.frame != glm::dmat3(1.0));
         REQUIRE(turned.lightmaps.size() == 1);
         REQUIRE(turned.images.size() == 1);
         const BakedLightmap& a = turned.lightmaps[0];
@@ -191,6 +198,29 @@ TEST_CASE("A scene turned at any angle bakes as it does unturned: the voxel grid
         CHECK(indirect.relativeRmse <= 0.01);
         CHECK(image.relativeRmse <= 0.01);
     }
+}
+
+TEST_CASE("A scene without a camera is framed in the world's orientation, however the bake turns it", "[bake]") {
+    // `voxlight reference` and the bench frame a camera-less scene by its world bounds, looking
+    // along −Z; the bake's default camera must be that camera after the scene's turn.
+    Scene scene;
+    const int white = vl::test::addLambert(scene, vec3(0.6f));
+    vl::test::addRoom(scene, "room/", white, vec3(0.0f), vec3(3.0f, 2.0f, 1.0f));
+    const glm::mat3 turn = glm::mat3_cast(glm::angleAxis(0.6f, glm::normalize(vec3(1.0f, 2.0f, 0.5f))));
+    for (Mesh& mesh : scene.meshes)
+        for (vec3& p : mesh.positions) p = turn * p;
+    BakeSettings settings = placementSettings();
+    const Camera expected = defaultCamera(scene.bounds(), 1.0f);
+    Scene turned = scene;
+    REQUIRE(turnToOwnFrame(turned));
+    anchorToVoxelGrid(turned, 0.01);
+    const std::vector<Camera> cameras = bakeCameras(turned, settings);
+    REQUIRE(cameras.size() == 1);
+    const auto world = [&](const vec3& p) { return vec3(turned.origin + turned.frame * glm::dvec3(p)); };
+    const auto worldDirection = [&](const vec3& d) { return vec3(turned.frame * glm::dvec3(d)); };
+    CHECK(glm::distance(world(cameras[0].position), expected.position) < 1e-4f);
+    CHECK(glm::distance(worldDirection(cameras[0].forward), expected.forward) < 1e-5f);
+    CHECK(glm::distance(worldDirection(cameras[0].up), expected.up) < 1e-5f);
 }
 
 TEST_CASE("The path tracer's lightmap means do not change with the scene's scale, position or quarter turns",

@@ -58,11 +58,13 @@ TEST_CASE("The default voxel size puts kVoxelsPerFreePath voxels along the mean 
     // The light is 0.4 m from every wall: farther than a voxel, so the free path alone decides.
     const Scene scene = roomWithLight(vec3(2.0f, 1.0f, 0.8f), vec3(1.0f, 0.5f, 0.4f));
     const VoxelSizeChoice choice = chooseVoxelSize(scene, quietSettings());
-    const double wanted = choice.freePaths.mean / kVoxelsPerFreePath;
-    // The count along the longest side is rounded up to an odd number.
-    CHECK(choice.voxelSize <= wanted * (1.0 + 1e-9));
-    CHECK(choice.voxelSize > wanted * (1.0 - 2.0 / choice.voxelsAlongLongest));
-    CHECK(choice.voxelsAlongLongest % 2 == 1);
+    // The count along the longest side (2 m) is the 8k − 1 nearest 2 m / (mean / 31): the
+    // gather cells' 4 voxels fit twice between the walls' outermost voxels.
+    const double wanted = 2.0 / (choice.freePaths.mean / kVoxelsPerFreePath);
+    const int count = choice.voxelsAlongLongest;
+    CHECK((count + 1) % 8 == 0);
+    CHECK(std::abs(count - wanted) <= 4.0);
+    CHECK(choice.voxelSize == Approx(2.0 / count).epsilon(1e-9));
     CHECK_THAT(choice.setBy, Catch::Contains("the mean free path between its surfaces"));
     CHECK(choice.warnings.empty());
 }
@@ -82,9 +84,11 @@ TEST_CASE("A room turned at an angle to the world axes gets the voxel size of th
         const double unturned = chooseVoxelSize(scene, quietSettings()).voxelSize;
         const VoxelSizeChoice choice = chooseVoxelSize(turned(scene), quietSettings());
         // The rays' directions about each point turn with the room only up to its basis: the
-        // same mean within the probe's spread; the odd count rounds on longer bounds.
-        CHECK(choice.voxelSize == Approx(unturned).epsilon(0.03));
-        CHECK_THAT(choice.setBy, Catch::Contains("the mean free path"));
+        // same mean within the probe's spread, and the count along the room's own longest side
+        // (in its own frame) the same 8k − 1 or the next.
+        CHECK(choice.freePaths.mean == Approx(chooseVoxelSize(scene, quietSettings()).freePaths.mean).epsilon(0.02));
+        CHECK(std::abs(2.0 / choice.voxelSize - 2.0 / unturned) <= 8.0 + 1e-6);
+        CHECK_THAT(choice.setBy, Catch::Contains("the mean free path") && Catch::Contains("in its own frame"));
     }
     SECTION("open: the size rule counts along the scene's own longest side") {
         // A 2 m × 1 m floor with a wall 0.2 m high along one long side: most rays leave.
@@ -101,6 +105,24 @@ TEST_CASE("A room turned at an angle to the world axes gets the voxel size of th
         CHECK(choice.voxelSize > 2.0 / kSceneVoxels * (1.0 - 2.0 / choice.voxelsAlongLongest));
         CHECK_THAT(choice.setBy, Catch::Contains("in its own frame") && Catch::Contains("an open scene"));
     }
+}
+
+TEST_CASE("Surfaces a few millimetres apart cap the free-path rule, with a warning", "[bake]") {
+    // Two 1 m plates facing each other 2 mm apart: a mean free path of millimetres would ask
+    // for thousands of voxels along the plates.
+    Scene scene;
+    scene.sourcePath = "plates (test)";
+    const int white = addLambert(scene, vec3(0.6f));
+    addQuad(scene, "lower", white, vec3(0.0f), vec3(0.0f, 0.0f, 1.0f), vec3(1.0f, 0.0f, 1.0f), vec3(1.0f, 0.0f, 0.0f));
+    addQuad(scene, "upper", white, vec3(0.0f, 0.002f, 0.0f), vec3(1.0f, 0.002f, 0.0f), vec3(1.0f, 0.002f, 1.0f),
+            vec3(0.0f, 0.002f, 1.0f));
+    const VoxelSizeChoice choice = chooseVoxelSize(scene, quietSettings());
+    INFO(choice.setBy);
+    CHECK(choice.freePaths.mean < 0.01);
+    CHECK(choice.voxelsAlongLongest <= kMaxFreePathVoxels);
+    REQUIRE(choice.warnings.size() == 1);
+    CHECK_THAT(choice.warnings[0], Catch::Contains("plates (test)") && Catch::Contains("free paths") &&
+                                       Catch::Contains("voxel-size"));
 }
 
 TEST_CASE("A light's clearance is its distance to the nearest triangle", "[bake]") {

@@ -83,6 +83,19 @@ TEST_CASE("A turned room's own axes are its walls' normals, and turning into the
     CHECK_FALSE(turnToOwnFrame(scene));
 }
 
+TEST_CASE("Moving a turned scene's origin keeps every point where it is in the world", "[scene]") {
+    Scene scene = turnedRoom(vec3(3.0f, 2.0f, 1.0f), rotation(0.7f, vec3(1.0f, 2.0f, 0.5f)));
+    scene.origin = glm::dvec3(1000.0, -20.0, 5.0);
+    REQUIRE(turnToOwnFrame(scene));
+    const auto world = [&](const vec3& p) { return scene.origin + scene.frame * glm::dvec3(p); };
+    std::vector<glm::dvec3> before;
+    for (const vec3& p : scene.meshes[0].positions) before.push_back(world(p));
+    const glm::dvec3 lightBefore = world(scene.lights[0].position);
+    scene.moveOrigin(glm::dvec3(1001.5, -19.0, 7.25));
+    for (size_t v = 0; v < before.size(); ++v) CHECK(glm::distance(world(scene.meshes[0].positions[v]), before[v]) <= 1e-5);
+    CHECK(glm::distance(world(scene.lights[0].position), lightBefore) <= 1e-5);
+}
+
 TEST_CASE("A scene with nothing to turn keeps its frame exactly", "[scene]") {
     SECTION("axis-aligned") {
         CHECK(ownFrameAxes(turnedRoom(vec3(3.0f, 2.0f, 1.0f), glm::mat3(1.0f))) == glm::dmat3(1.0));

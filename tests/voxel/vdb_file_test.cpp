@@ -137,6 +137,26 @@ TEST_CASE("A turned scene's grids carry its frame and origin, and read back with
     CHECK(mipBack.voxelSize == Approx(mip.voxelSize).epsilon(1e-14));
     CHECK(glm::distance(mipBack.translation, mip.translation) <= 1e-9);
     for (int k = 0; k < 3; ++k) CHECK(glm::distance(mipBack.frame[k], mip.frame[k]) <= 1e-15);
+    // OpenVDB itself places the voxels there: the active voxels' world box, by OpenVDB's
+    // transform, is the box of origin + frame · (corner · h) over the index box's corners.
+    const VdbFileInfo info = inspectVoxelFile(path);
+    const GridInfo* opacity = nullptr;
+    for (const GridInfo& g : info.grids)
+        if (g.name == "opacity") opacity = &g;
+    REQUIRE(opacity != nullptr);
+    glm::dvec3 lower(1e300), upper(-1e300);
+    for (int corner = 0; corner < 8; ++corner) {
+        glm::dvec3 index;
+        for (int a = 0; a < 3; ++a)
+            index[a] = (corner >> a & 1) ? opacity->indexMax[a] + 0.5 : opacity->indexMin[a] - 0.5;
+        const glm::dvec3 world = scene.origin + scene.frame * (index * scene.voxelSize);
+        lower = glm::min(lower, world);
+        upper = glm::max(upper, world);
+    }
+    for (int a = 0; a < 3; ++a) {
+        CHECK(opacity->worldMin[a] == Approx(lower[a]).margin(1e-9));
+        CHECK(opacity->worldMax[a] == Approx(upper[a]).margin(1e-9));
+    }
     // An unturned scene keeps the scale-translate transform of every file before frames.
     const std::string plain = test::tempDir("vdb_file") + "/plain.vdb";
     writeVoxelFile(syntheticScene(false), plain);

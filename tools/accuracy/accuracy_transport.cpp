@@ -104,6 +104,7 @@ int main(int argc, char** argv) {
         // The bake moved its copy of the scene to put a voxel corner at the centre of its
         // bounds: the rays must see the triangles where the voxels do.
         Scene anchored = scene;
+        if (anchored.frame != baked.voxels.frame) anchored.turnFrame(baked.voxels.frame);
         anchorToVoxelGrid(anchored, baked.voxels.voxelSize);
         const SceneTriangles triangles = gatherTriangles(anchored);
         const Bvh bvh = Bvh::build(triangles);

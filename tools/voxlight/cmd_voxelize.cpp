@@ -5,6 +5,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "scene/gltf_loader.h"
+#include "scene/own_frame.h"
 #include "voxel/vdb_file.h"
 #include "voxel/voxelize.h"
 
@@ -61,6 +62,9 @@ void runVoxelize(const VoxelizeOptions& options, bool voxelSizeGiven, bool resol
     settings.voxelSize = voxelSizeGiven ? options.voxelSize : 0.0;
     settings.resolution = options.resolution;
     settings.fillInterior = options.fillInterior;
+    // Into its own frame first, as a bake does (the grid along its walls): a resolution then
+    // counts along the grid's axes.
+    turnToOwnFrame(scene);
     if (!voxelSizeGiven && !resolutionGiven) {
         // The voxel size a default bake of the scene would choose, so the grids match its.
         const VoxelSizeChoice choice = chooseVoxelSize(scene, BakeSettings{});
@@ -72,7 +76,8 @@ void runVoxelize(const VoxelizeOptions& options, bool voxelSizeGiven, bool resol
     VoxelScene voxels;
     {
         Progress progress("voxelize", scene.triangleCount(), options.quiet);
-        anchorToVoxelGrid(scene, voxelSizeFor(scene, settings));
+        settings.voxelSize = voxelSizeFor(scene, settings);
+        anchorToVoxelGrid(scene, settings.voxelSize);
         voxels = voxelize(scene, settings, &progress, &stats);
         progress.finish();
     }
