@@ -126,6 +126,28 @@ BakeSettings placementSettings() {
     return settings;
 }
 
+// How far a bake is from another of the same scene placed otherwise: relative RMSE of the
+// lightmap (over `base`'s covered texels) and its parts, and of the first camera's image (the
+// emitter, seen directly, left out).
+struct Difference {
+    ErrorMetrics total, direct, indirect, image;
+};
+Difference difference(const BakeResult& other, const BakeResult& base) {
+    REQUIRE(other.lightmaps.size() == 1);
+    REQUIRE(other.images.size() == 1);
+    REQUIRE(base.lightmaps.size() == 1);
+    REQUIRE(base.images.size() == 1);
+    MetricOptions lightmapOptions;
+    lightmapOptions.mask = &base.lightmaps[0].mask;
+    MetricOptions imageOptions;
+    imageOptions.excludeReferenceAbove = 5.0f;
+    const BakedLightmap& a = other.lightmaps[0];
+    const BakedLightmap& b = base.lightmaps[0];
+    return {compareImages(a.total, b.total, lightmapOptions), compareImages(a.direct, b.direct, lightmapOptions),
+            compareImages(a.indirect, b.indirect, lightmapOptions),
+            compareImages(other.images[0].beauty, base.images[0].beauty, imageOptions)};
+}
+
 }  // namespace
 
 TEST_CASE("The bake does not change with the scene's scale, position or quarter turns", "[bake]") {
@@ -133,22 +155,9 @@ TEST_CASE("The bake does not change with the scene's scale, position or quarter 
     Diagnostics diagnostics(false, false);
     const Scene baseScene = load(fs::path(vl::test::sourceDir()) / kSource);
     const BakeResult base = bake(baseScene, settings, diagnostics);
-    REQUIRE(base.lightmaps.size() == 1);
-    REQUIRE(base.images.size() == 1);
-    MetricOptions lightmapOptions;
-    lightmapOptions.mask = &base.lightmaps[0].mask;
-    MetricOptions imageOptions;
-    imageOptions.excludeReferenceAbove = 5.0f;  // the emitter, seen directly
     for (const Placement& placement : placements()) {
         const BakeResult placed = bake(loadPlaced(placement, baseScene, "placement-bake"), settings, diagnostics);
-        REQUIRE(placed.lightmaps.size() == 1);
-        REQUIRE(placed.images.size() == 1);
-        const BakedLightmap& a = placed.lightmaps[0];
-        const BakedLightmap& b = base.lightmaps[0];
-        const ErrorMetrics total = compareImages(a.total, b.total, lightmapOptions);
-        const ErrorMetrics direct = compareImages(a.direct, b.direct, lightmapOptions);
-        const ErrorMetrics indirect = compareImages(a.indirect, b.indirect, lightmapOptions);
-        const ErrorMetrics image = compareImages(placed.images[0].beauty, base.images[0].beauty, imageOptions);
+        const auto [total, direct, indirect, image] = difference(placed, base);
         INFO(placement.name << ": relative RMSE against the untouched bake: lightmap " << total.relativeRmse
                             << " (direct " << direct.relativeRmse << ", indirect " << indirect.relativeRmse
                             << "), image " << image.relativeRmse);
@@ -171,12 +180,6 @@ TEST_CASE("A scene turned at any angle bakes as it does unturned: the voxel grid
     BakeSettings settings = placementSettings();
     Diagnostics diagnostics(false, false);
     const BakeResult base = bake(load(source.string()), settings, diagnostics);
-    REQUIRE(base.lightmaps.size() == 1);
-    REQUIRE(base.images.size() == 1);
-    MetricOptions lightmapOptions;
-    lightmapOptions.mask = &base.lightmaps[0].mask;
-    MetricOptions imageOptions;
-    imageOptions.excludeReferenceAbove = 5.0f;
     const std::vector<Placement> turns = {{"turn 1", {}, 1.0, {0.464, 0.175, 0.796, -0.346}},
                                           {"turn 4", {}, 1.0, {-0.766, 0.058, 0.117, 0.629}}};
     for (const Placement& placement : turns) {
@@ -185,13 +188,7 @@ TEST_CASE("A scene turned at any angle bakes as it does unturned: the voxel grid
         // The loader placed the box turned, and the bake turned the grid with it.
         CHECK(maxComponent(scene.bounds().extent()) > 1.2f * maxComponent(load(source.string()).bounds().extent()));
         CHECK(turned.voxels.frame != glm::dmat3(1.0));
-        REQUIRE(turned.lightmaps.size() == 1);
-        REQUIRE(turned.images.size() == 1);
-        const BakedLightmap& a = turned.lightmaps[0];
-        const BakedLightmap& b = base.lightmaps[0];
-        const ErrorMetrics total = compareImages(a.total, b.total, lightmapOptions);
-        const ErrorMetrics indirect = compareImages(a.indirect, b.indirect, lightmapOptions);
-        const ErrorMetrics image = compareImages(turned.images[0].beauty, base.images[0].beauty, imageOptions);
+        const auto [total, direct, indirect, image] = difference(turned, base);
         INFO(placement.name << ": relative RMSE against the unturned bake: lightmap " << total.relativeRmse
                             << " (indirect " << indirect.relativeRmse << "), image " << image.relativeRmse);
         CHECK(total.relativeRmse <= 0.005);
