@@ -8,9 +8,10 @@
 //   (bake settings; --only: turn K alone, 0 unturned; --write: each lightmap's total,
 //   direct and indirect as DIR/<box>_turnK{,_direct,_indirect}.exr, to map where the error is)
 //
-// To compare voxel counts, give `voxel-size` (the box's side over the count: 0.559 m / N), not
-// `resolution`: a resolution counts voxels along the turned box's axis-aligned bounds, up to
-// √3 times its own side, and bakes the turns coarser than the unturned box.
+// The bake turns each box into its own frame before it sizes it (scene/own_frame.h), so a
+// `resolution` counts voxels along the box's own side at every turn; `grid-frame=world` keeps
+// the grid on the world's axes, where a resolution counts along the turned box's axis-aligned
+// bounds (up to √3 times its side: give `voxel-size`, 0.559 m / N, to compare counts there).
 #include "bake/bake.h"
 #include "bake/bake_settings.h"
 #include "core/image_io.h"
