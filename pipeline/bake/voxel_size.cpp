@@ -217,8 +217,9 @@ VoxelSizeChoice chooseVoxelSize(const Scene& scene, const BakeSettings& settings
         // Only a user's choice of cones is known here: auto decides on the gather points, which
         // the voxel size places (ray_gather.h chooseGatherVisibility).
         const bool byCones = settings.gatherVisibility == GatherVisibility::Cones;
-        // Counts along the scene's own longest side: the bake turns the scene into its own
-        // frame (voxelize.h anchorToVoxelGrid), and that side is then along a grid axis.
+        // Counts along the scene's own longest side: the bake has turned the scene into its
+        // own frame before it sizes it (scene/own_frame.h), so that side is along a grid axis;
+        // a scene given here unturned is measured in its own frame all the same.
         const double ownLongest = ownFrameLongestSide(scene, longest);
         const bool turned = ownLongest < longest * (1.0 - 1e-4);
         const int cellVoxels = 1 << std::max(0, std::max(settings.gatherLevel, settings.bounceGatherLevel));
