@@ -1,5 +1,6 @@
 // A bake split into units (cluster/units.h) and run unit by unit in this process writes the
 // same bytes as the local bake of the same job; a failed unit fails its scene with its error.
+#include "bake/bake_job.h"
 #include "bake/job_file.h"
 #include "cluster/slurm.h"
 #include "cluster/units.h"
@@ -151,6 +152,25 @@ TEST_CASE("A damaged voxel state is refused, naming the file", "[cluster]") {
     CHECK_THAT(receiver.error, Catch::Contains("damaged"));
     std::ofstream(state, std::ios::binary) << data.substr(0, 100);
     CHECK_THROWS_WITH(readVoxelState(state.string()), Catch::Contains(state.string()));
+}
+
+TEST_CASE("A voxel state refuses a scene that lies otherwise than the one it was made from", "[cluster]") {
+    // The receiver units turn and anchor the scene as the voxel unit did (the state keeps its
+    // frame and origin); a scene that moved since gives another origin, and its receivers would
+    // read the wrong voxels.
+    const fs::path root = test::tempDir("cluster-moved");
+    fs::remove_all(root);
+    const BakeJob job = tinyBoxJob(root);
+    const std::string work = (root / "work").string();
+    REQUIRE(runVoxelUnit(job, work).ok);
+    const VoxelState state = readVoxelState((fs::path(work) / "voxel" / "voxel-state.vxu").string());
+    CHECK_NOTHROW(receiverScene(loadJobScene(job), state));
+    Scene moved = loadJobScene(job);
+    for (Mesh& mesh : moved.meshes)
+        for (vec3& p : mesh.positions) p += vec3(0.25f, 0.0f, 0.0f);
+    CHECK_THROWS_WITH(receiverScene(moved, state),
+                      Catch::Contains("cornell_box.gltf") && Catch::Contains("lies otherwise") &&
+                          Catch::Contains("the scene changed"));
 }
 
 TEST_CASE("A unit whose scene changed since submission records why and does not run", "[cluster]") {
