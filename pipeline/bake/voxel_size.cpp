@@ -5,10 +5,10 @@
 #include "core/error.h"
 #include "core/memory.h"
 #include "core/math.h"
-#include "scene/own_frame.h"
 #include "core/ray.h"
 #include "core/rng.h"
 #include "core/sampling.h"
+#include "scene/own_frame.h"
 #include "trace/bvh.h"
 #include "trace/bvh_traverse.h"
 #include "trace/ray_offset.h"
@@ -73,9 +73,9 @@ double distanceToNearestTriangle(const std::vector<TriangleRef>& triangles, cons
 }
 
 // The longest side of the scene's box in its own frame (scene/own_frame.h), or the
-// axis-aligned box where that is no shorter. Why: the size is chosen before the bake turns the
-// scene into its own frame, and a room modelled at an angle to the world axes has axis-aligned
-// bounds up to √3 times its own size.
+// axis-aligned box where that is no shorter. The bake turns the scene first, and this is then
+// its box; a scene left at an angle (grid-frame=world, or a caller's own) gets the size its
+// own frame would, not one from axis-aligned bounds up to √3 times its own size.
 double ownFrameLongestSide(const Scene& scene, double axisAlignedLongest) {
     const glm::dmat3 axes = ownFrameAxes(scene);
     glm::dvec3 lower(std::numeric_limits<double>::infinity()), upper(-std::numeric_limits<double>::infinity());
@@ -118,19 +118,16 @@ FreePaths surfaceFreePaths(const Scene& scene, int rays) {
             vec3 n = glm::cross(b - a, c - a);
             if (!(glm::length(n) > 0.0f)) continue;
             n = glm::normalize(n);
-            float u, v;
-            rng.next2D(u, v);
-            if (u + v > 1.0f) {
-                u = 1.0f - u;
-                v = 1.0f - v;
-            }
+            vec2 u;
+            rng.next2D(u.x, u.y);
+            const vec2 barycentric = sampleUniformTriangle(u);
             vec2 w;
             rng.next2D(w.x, w.y);
             vec3 tangent, bitangent;
             orthonormalBasis(n, tangent, bitangent);
             const vec3 local = sampleCosineHemisphere(w);
             Ray ray;
-            ray.origin = offsetRayOrigin(a + u * (b - a) + v * (c - a), n, view.extent);
+            ray.origin = offsetRayOrigin(a + barycentric.x * (b - a) + barycentric.y * (c - a), n, view.extent);
             ray.direction = glm::normalize(local.x * tangent + local.y * bitangent + local.z * n);
             Hit hit;
             if (!intersectClosest(view, ray, hit)) continue;

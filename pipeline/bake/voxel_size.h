@@ -6,7 +6,7 @@
 //  * how far light goes between the scene's surfaces: kVoxelsPerFreePath voxels along the
 //    mean free path of cosine rays from its surfaces (surfaceFreePaths). The indirect
 //    light's detail follows the distances it crosses between bounces, not the scene's extent:
-//    the Cycles Cornell boxes (mean free path 27.7 / 27.4 cm, 55.9 cm long) and the two rooms
+//    the Cycles Cornell boxes (mean free path 27.3 / 27.2 cm, 55.9 cm long) and the two rooms
 //    (1.88 m, 6.1 m long) have their best error² × time at 63 and 103–127 voxels along their
 //    longest sides, 31–35 along their free paths (`voxlight bench`, gather level 2,
 //    2026-11-27). The count along the scene's own longest side is rounded to fit the gather
@@ -63,7 +63,6 @@ struct FreePaths {
     int rays = 0, hits = 0;
     int singleSidedBacks = 0;         // of the hits, on the back of a single-sided surface
     double mean = 0.0, median = 0.0;  // metres, over the rays that hit
-    double backShare() const { return hits > 0 ? double(singleSidedBacks) / hits : 0.0; }
 };
 FreePaths surfaceFreePaths(const Scene& scene, int rays = 4096);
 

@@ -20,7 +20,8 @@ namespace vl {
 // axis steps by one voxel across 115 voxels, less than the scene's own modelling (the classic
 // Cornell box's walls are up to 0.08° out of square), and a turn that small changed only which
 // voxel walls lying on voxel faces fall in: the classic box's bake moved by 1.5% in its
-// indirect light between its quarter turns, which find its skew along other walls.
+// indirect light between its quarter turns, which find its skew along other walls
+// (`build/tests/test_bake "The bake does not change*"` with no minimum turn).
 constexpr double kOwnFrameMinTurn = 0.5 * 3.14159265358979323846 / 180.0;  // radians
 
 // The own frame's axes in `scene`'s local frame (columns), a rotation: column k is the own

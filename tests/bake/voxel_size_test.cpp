@@ -1,6 +1,7 @@
 // The voxel size a bake chooses from its scene (bake/voxel_size.h): the free paths against
-// Cauchy's mean chord, the rules, each light's clearance against analytic distances, the user's settings winning, and what the
-// clearance rule is for: a light close to a ceiling keeps its bounce light.
+// Cauchy's mean chord, the rules, each light's clearance against analytic distances, the
+// user's settings winning, and what the clearance rule is for: a light close to a ceiling
+// keeps its bounce light.
 #include "bake/bake.h"
 #include "bake/bake_job.h"
 #include "bake/voxel_size.h"
@@ -81,12 +82,13 @@ TEST_CASE("A room turned at an angle to the world axes gets the voxel size of th
     };
     SECTION("closed: the free paths do not turn") {
         const Scene scene = roomWithLight(vec3(2.0f, 1.0f, 0.8f), vec3(1.0f, 0.5f, 0.4f));
-        const double unturned = chooseVoxelSize(scene, quietSettings()).voxelSize;
+        const VoxelSizeChoice unturnedChoice = chooseVoxelSize(scene, quietSettings());
+        const double unturned = unturnedChoice.voxelSize;
         const VoxelSizeChoice choice = chooseVoxelSize(turned(scene), quietSettings());
         // The rays' directions about each point turn with the room only up to its basis: the
         // same mean within the probe's spread, and the count along the room's own longest side
         // (in its own frame) the same 8k − 1 or the next.
-        CHECK(choice.freePaths.mean == Approx(chooseVoxelSize(scene, quietSettings()).freePaths.mean).epsilon(0.02));
+        CHECK(choice.freePaths.mean == Approx(unturnedChoice.freePaths.mean).epsilon(0.02));
         CHECK(std::abs(2.0 / choice.voxelSize - 2.0 / unturned) <= 8.0 + 1e-6);
         CHECK_THAT(choice.setBy, Catch::Contains("the mean free path") && Catch::Contains("in its own frame"));
     }
