@@ -4,6 +4,7 @@
 #include "bake/dilate.h"
 #include "bake/ray_gather.h"
 #include "bake/shade_receivers.h"
+#include "bake/texel_gather.h"
 #include "bake/voxel_size.h"
 #include "cone/bounces.h"
 #include "core/error.h"
@@ -11,6 +12,7 @@
 #include "core/progress.h"
 #include "cuda/launchers.h"
 #include "lighting/lighting.h"
+#include "lighting/surface_light.h"
 #include "scene/own_frame.h"
 #include "trace/bvh.h"
 #include "trace/camera.h"
@@ -30,6 +32,10 @@ namespace {
 // edges are the brightest contrast in an image (measured on the Cycles Cornell render: the
 // emitter's edge pixels held 99% of the squared error at 2 × 2).
 constexpr int kEmissionSubsamples = 8;
+
+// The sky's rays per surface point of the voxel pass by rays (2 × 2): a voxel side holds about
+// four points, so it sees the sky through about 16 rays, which the gathers then average.
+constexpr int kVoxelSkyStrata = 2;
 
 double surfaceArea(const Scene& scene) {
     double area = 0.0;
@@ -220,14 +226,28 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
         Progress progress("voxelize", scene.triangleCount(), settings.quiet);
         return voxelize(scene, voxelSettings, &progress);
     });
-    timed(result.stages, "voxel light", [&] {
-        Progress progress("voxel light", result.voxels.size(), settings.quiet);
-        if (onGpu) return cuda::lightVoxelsCuda(scene, result.voxels, settings.lighting);
-        return lightVoxels(scene, result.voxels, settings.lighting, &progress);
-    });
     stages.tracing = timed(result.stages, "bvh", [&] { return std::make_unique<ReceiverScene>(scene); });
     const TraceSceneView sceneView = stages.tracing->traceScene.view();
     const BvhView bvhView = stages.tracing->bvh.view();
+    // Points on the voxels' surfaces: what the voxel pass by rays lights and the final gather's
+    // bright patches send from.
+    const bool finalGather = settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images);
+    const bool needPoints = settings.lighting.visibilityBy == VoxelVisibility::Rays ||
+                            (finalGather && settings.brightPatches.factor > 0.0f);
+    const VoxelSurfacePoints surfacePoints = timed(result.stages, "surface points", [&] {
+        return needPoints ? voxelSurfacePoints(result.voxels, sceneView, settings.lighting.surfacePoints)
+                          : VoxelSurfacePoints{};
+    });
+    timed(result.stages, "voxel light", [&] {
+        Progress progress("voxel light", result.voxels.size(), settings.quiet);
+        if (settings.lighting.visibilityBy == VoxelVisibility::Rays) {
+            lightVoxelsByRays(result.voxels, surfacePoints, sceneView, bvhView, kVoxelSkyStrata, &progress);
+            return 0;
+        }
+        if (onGpu) cuda::lightVoxelsCuda(scene, result.voxels, settings.lighting);
+        else lightVoxels(scene, result.voxels, settings.lighting, &progress);
+        return 0;
+    });
     const bool gathers =
         settings.bounces > 0 || (settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images));
     const EnclosedProbe enclosed = enclosedSurfaceProbe(bvhView, sceneView);
@@ -272,7 +292,8 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
         Progress progress("bounces", uint64_t(settings.bounces) * result.voxels.size(), settings.quiet);
         propagateBounces(result.voxels, bounceConeSettings(settings), settings.bounces, settings.bounceGatherLevel,
                          settings.bounceTail ? BounceTail::Geometric : BounceTail::None, &progress, &bounced,
-                         &bouncePoints, byRays ? &bounceRays : nullptr, &sky);
+                         &bouncePoints, byRays ? &bounceRays : nullptr,
+                         settings.lighting.visibilityBy == VoxelVisibility::Rays ? nullptr : &sky);
         return 0;
     });
     const bool reusePoints = bounced.levelCount() > 0 && settings.bounceGatherLevel == settings.gatherLevel;
@@ -284,11 +305,12 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
 
     // The final gather, once for every receiver of every output.
     IrradianceCache& cache = stages.cache;
-    if (settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images)) {
+    if (finalGather) {
         timed(result.stages, "gather", [&] {
             // The bright patches leave the light the gather reads (the rays read faces, the
             // cones the mips), and come back after.
-            const BrightPatchSplit split = splitBrightPatches(result.voxels, settings.brightPatches);
+            stages.bright = splitBrightPatches(result.voxels, surfacePoints, settings.brightPatches);
+            const BrightPatchSplit& split = stages.bright;
             result.brightPatches = split.patches.size();
             const bool relight = !split.patches.empty() && !byRays;
             if (relight) result.mips.relight(result.voxels, split.restRadiance, split.restFaces);
@@ -327,7 +349,7 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
                     for (const GatherPoint& point : cache.points())
                         origins.push_back(coneApex(point.position, point.normal, settings.cone, h));
                 }
-                addBrightPatchIrradiance(cache.points(), origins, split.patches, bvhView, h, irradiance);
+                addBrightPatchIrradiance(cache.points(), origins, split, bvhView, settings.brightPatches.samples, irradiance);
                 cache.setIrradiance(std::move(irradiance));
             }
             if (relight) result.mips.relight(result.voxels, result.voxels.radiance, result.voxels.faceRadiance);
@@ -361,13 +383,18 @@ std::vector<Camera> bakeCameras(const Scene& scene, const BakeSettings& settings
 }
 
 ReceiverShading::ReceiverShading(const ReceiverScene& tracing, const RadianceMips& mips, const IrradianceCache& cache,
-                                 const BakeSettings& settings, bool onGpu)
+                                 const BrightPatchSplit& bright, const BakeSettings& settings, bool onGpu)
     : tracing_(tracing),
+      bright_(bright),
       settings_(settings),
       onGpu_(onGpu),
       mipView_(mips.view()),
       cacheView_(cache.view(mipView_)),
       gathered_(settings.gatherLevel >= 0 ? &cacheView_ : nullptr) {}
+
+bool ReceiverShading::texelGather() const {
+    return settings_.lightmapGather == LightmapGather::Texels && !onGpu_ && gathered_ && gathered_->raysPerAxis > 0;
+}
 
 ReceiverLighting ReceiverShading::shadeAtlasRows(const LightmapAtlas& atlas, int rowBegin, int rowEnd) const {
     const SurfaceSampleSet& receivers = atlas.receivers;
@@ -384,6 +411,27 @@ ReceiverLighting ReceiverShading::shadeAtlasRows(const LightmapAtlas& atlas, int
                 const size_t element = k / 3;
                 if (element < first || element >= last) image->pixels[k] = 0.0f;
             }
+    } else if (texelGather()) {
+        // The direct light per sample, the indirect from the atlas's own records. The records
+        // of the rows around the band read the direct light there too (whether a record may be
+        // buried), so it is shaded a lattice spacing past the band and cleared after.
+        TexelGatherSettings texels;
+        texels.spacing = settings_.texelGatherSpacing;
+        texels.raysPerAxis = settings_.gatherRays;
+        texels.brightSamples = settings_.brightPatches.samples;
+        const int spacing = texelGatherSpacing(atlas, mipView_.voxelSize, texels);
+        texels.spacing = spacing;
+        const size_t width = static_cast<size_t>(receivers.width);
+        const size_t around = std::min(first, spacing * width), after = std::min(receivers.elementCount() - last, spacing * width);
+        lit = shadeReceivers(receivers, tracing_.traceScene.view(), tracing_.bvh.view(), nullptr, nullptr,
+                             settings_.cone, settings_.direct, true, &progress, first - around, last + after);
+        progress.finish();
+        lit.indirect = gatherAtlasIndirect(atlas, rowBegin, rowEnd, &lit.direct, mipView_, bright_.restFaces, bright_,
+                                           tracing_.bvh.view(), tracing_.traceScene.view(), texels);
+        for (Image* image : {&lit.direct, &lit.directRadiance})
+            for (size_t k = 0; k < image->pixels.size(); ++k)
+                if (k / 3 < first || k / 3 >= last) image->pixels[k] = 0.0f;
+        return lit;  // a lightmap's indirectRadiance is not read: it stays 0
     } else {
         lit = shadeReceivers(receivers, tracing_.traceScene.view(), tracing_.bvh.view(), &mipView_, gathered_,
                              settings_.cone, settings_.direct, true, &progress, first, last);
@@ -421,7 +469,7 @@ BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, co
 BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnostics) {
     VoxelStages stages = bakeVoxelStages(scene, settings, diagnostics);
     BakeResult& result = stages.result;
-    const ReceiverShading shading(*stages.tracing, result.mips, stages.cache, settings, stages.onGpu);
+    const ReceiverShading shading(*stages.tracing, result.mips, stages.cache, stages.bright, settings, stages.onGpu);
     if (settings.outputs.lightmaps) {
         timed(result.stages, "lightmaps", [&] {
             for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics)) {

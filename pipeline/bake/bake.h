@@ -6,6 +6,7 @@
 #pragma once
 
 #include "bake/bake_settings.h"
+#include "bake/bright_patches.h"
 #include "bake/ray_gather.h"
 #include "bake/receivers.h"
 #include "bake/shade_receivers.h"
@@ -97,6 +98,7 @@ struct VoxelStages {
     BakeResult result;          // every field but lightmaps and images
     LightmapSettings lightmap;  // the settings', with the atlas generated lightmap UVs need
     IrradianceCache cache;      // the final gather; no points when gather-level < 0
+    BrightPatchSplit bright;    // the final gather's bright patches and the light its rays read
     bool onGpu = false;         // the device the settings resolved to
     std::unique_ptr<ReceiverScene> tracing;
 };
@@ -112,15 +114,22 @@ std::vector<Camera> bakeCameras(const Scene& scene, const BakeSettings& settings
 // Receivers lit from the voxel stages' mips and gather.
 class ReceiverShading {
 public:
+    // `bright`: the final gather's split of the voxels' light (VoxelStages::bright), which
+    // lightmaps gathered in texel space read (bake/texel_gather.h).
     ReceiverShading(const ReceiverScene& tracing, const RadianceMips& mips, const IrradianceCache& cache,
-                    const BakeSettings& settings, bool onGpu);
+                    const BrightPatchSplit& bright, const BakeSettings& settings, bool onGpu);
     // Rows [rowBegin, rowEnd) of an atlas; the other rows stay 0. Each texel's value does not
     // depend on which rows are shaded with it.
     ReceiverLighting shadeAtlasRows(const LightmapAtlas& atlas, int rowBegin, int rowEnd) const;
     BakedImage shadeCamera(const Camera& camera) const;
 
+    // Lightmaps gather their indirect light in their own texel space (bake/texel_gather.h):
+    // the setting's choice, where the final gather went by rays on the CPU.
+    bool texelGather() const;
+
 private:
     const ReceiverScene& tracing_;
+    const BrightPatchSplit& bright_;
     const BakeSettings& settings_;
     bool onGpu_;
     MipView mipView_;

@@ -53,6 +53,14 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
                  throw SettingsError("setting attenuation: coefficients must be finite, non-negative, not all zero");
              s.lighting.attenuation = k;
          }},
+        {"voxel-visibility", "how the voxel pass finds shadows: rays (against the triangles, from points on each voxel's surface) or stepping (the paper's walk through the voxels, eq. 17) (default rays)",
+         [](S& s, const std::string& v) {
+             if (v != "rays" && v != "stepping")
+                 throw SettingsError("setting voxel-visibility = '" + v + "' is not one of rays, stepping");
+             s.lighting.visibilityBy = v == "rays" ? VoxelVisibility::Rays : VoxelVisibility::Stepping;
+         }},
+        {"voxel-light-points", "with voxel-visibility rays: surface points per voxel face's area that the voxel pass lights (default 4)",
+         [](S& s, const std::string& v) { s.lighting.surfacePoints = parseIntSetting("voxel-light-points", v, 1, 256); }},
         {"voxel-emitter-strata", "n × n visibility points per emissive quad or triangle and voxel in the voxel lighting pass (default 1)",
          [](S& s, const std::string& v) { s.lighting.emitterStrata = parseIntSetting("voxel-emitter-strata", v, 1, 32); }},
         {"hdda", "skip empty space with NanoVDB's HDDA when stepping toward lights (default true)",
@@ -84,8 +92,10 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.brightPatches.factor = static_cast<float>(parseRealSetting("bright-patches", v, 0, 1e6)); }},
         {"bright-patch-cell", "voxels per axis of the cells whose bright faces merge into one patch (default 8)",
          [](S& s, const std::string& v) { s.brightPatches.cellVoxels = parseIntSetting("bright-patch-cell", v, 1, 1024); }},
-        {"bright-patch-max", "most bright patches, the most powerful first (default 256)",
-         [](S& s, const std::string& v) { s.brightPatches.maxPatches = parseIntSetting("bright-patch-max", v, 0, 65536); }},
+        {"bright-patch-samples", "shadow-ray samples of the bright patches per gather point (default 64)",
+         [](S& s, const std::string& v) { s.brightPatches.samples = parseIntSetting("bright-patch-samples", v, 1, 4096); }},
+        {"bright-patch-max", "most bright patches, the most powerful first (default 256, at most 1024)",
+         [](S& s, const std::string& v) { s.brightPatches.maxPatches = parseIntSetting("bright-patch-max", v, 0, 1024); }},
         {"gather-visibility", "what a gather point sees by: rays (against the triangles, reading the mips where they hit), cones (the mips' opacity) or auto (rays unless the scene's rays see the backs of single-sided surfaces) (default auto)",
          [](S& s, const std::string& v) { s.gatherVisibility = parseGatherVisibility(v); }},
         {"gather-rays", "rays per axis of each final-gather point's n x n fan when gathering by rays; as many as bounce-rays reuse the bounces' rays (default 14)",
@@ -95,6 +105,14 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
         {"bounce-gather-level", "voxels interpolate bounce light gathered once per surface side of each block of 2^n voxels (default 2)",
          [](S& s, const std::string& v) { s.bounceGatherLevel = parseIntSetting("bounce-gather-level", v, 0, kMaxCacheLevel); }},
         // Receivers
+        {"lightmap-gather", "where lightmaps gather their indirect light: texels (records on the atlas's own texels) or points (the voxel gather points images use); texels needs gather-visibility rays (default texels)",
+         [](S& s, const std::string& v) {
+             if (v != "texels" && v != "points")
+                 throw SettingsError("setting lightmap-gather = '" + v + "' is not one of texels, points");
+             s.lightmapGather = v == "texels" ? LightmapGather::Texels : LightmapGather::Points;
+         }},
+        {"texel-gather-spacing", "texels between a lightmap's gather records; 0: about 1.5 voxels (default 0)",
+         [](S& s, const std::string& v) { s.texelGatherSpacing = parseIntSetting("texel-gather-spacing", v, 0, 64); }},
         {"lightmap-res", "lightmap atlas width and height in texels (default 256)",
          [](S& s, const std::string& v) {
              s.lightmap.width = s.lightmap.height = parseIntSetting("lightmap-res", v, 1, kMaxLightmapResolution);
@@ -195,18 +213,26 @@ void validateBakeSettings(const BakeSettings& s) {
         throw SettingsError("setting emitter-strata = " + std::to_string(s.direct.emitterStrata) + " is outside 1..64");
     if (s.direct.skyStrata < 1 || s.direct.skyStrata > 64)
         throw SettingsError("setting sky-strata = " + std::to_string(s.direct.skyStrata) + " is outside 1..64");
+    if (s.lighting.visibilityBy == VoxelVisibility::Rays &&
+        (s.lighting.attenuation || !s.lighting.lightAttenuation.empty()))
+        throw SettingsError("setting attenuation: the paper's eq. 18 falloff is the stepping pass's; the receivers and "
+                            "voxel-visibility rays light by inverse square: add voxel-visibility stepping to use it");
 }
 
 std::string describeBakeSettings(const BakeSettings& s) {
     std::ostringstream out;
     out << "resolution=" << (s.voxel.resolution > 0 ? std::to_string(s.voxel.resolution) : "auto")
         << ", voxel-size=" << (s.voxel.voxelSize > 0.0 ? real(s.voxel.voxelSize) : "auto")
-        << ", fill-interior=" << s.voxel.fillInterior << ", normal-weights=" << toString(s.lighting.normalWeights)
+        << ", fill-interior=" << s.voxel.fillInterior
+        << ", voxel-visibility=" << (s.lighting.visibilityBy == VoxelVisibility::Rays ? "rays" : "stepping")
+        << ", normal-weights=" << toString(s.lighting.normalWeights)
         << ", hdda=" << (s.lighting.traversal == VisibilityTraversal::Hdda) << ", cones=" << s.cone.coneCount
         << ", aperture=" << s.cone.apertureDegrees << ", cone-offset=" << s.cone.startOffset
-        << ", step-factor=" << s.cone.stepFactor << ", bounces=" << s.bounces << ", bounce-cones=" << s.bounceCones << ", bounce-tail=" << s.bounceTail << ", gather-level=" << s.gatherLevel << ", gather-turns=" << s.gatherTurns << ", bright-patches=" << s.brightPatches.factor << ", bright-patch-cell=" << s.brightPatches.cellVoxels << ", bright-patch-max=" << s.brightPatches.maxPatches
+        << ", step-factor=" << s.cone.stepFactor << ", bounces=" << s.bounces << ", bounce-cones=" << s.bounceCones << ", bounce-tail=" << s.bounceTail << ", gather-level=" << s.gatherLevel << ", gather-turns=" << s.gatherTurns << ", bright-patches=" << s.brightPatches.factor << ", bright-patch-cell=" << s.brightPatches.cellVoxels << ", bright-patch-max=" << s.brightPatches.maxPatches << ", bright-patch-samples=" << s.brightPatches.samples
         << ", gather-visibility=" << toString(s.gatherVisibility) << ", gather-rays=" << s.gatherRays
-        << ", bounce-rays=" << s.bounceRays << ", bounce-gather-level=" << s.bounceGatherLevel << ", lightmap-res=" << s.lightmap.width
+        << ", bounce-rays=" << s.bounceRays << ", bounce-gather-level=" << s.bounceGatherLevel
+        << ", lightmap-gather=" << (s.lightmapGather == LightmapGather::Texels ? "texels" : "points")
+        << ", texel-gather-spacing=" << s.texelGatherSpacing << ", lightmap-res=" << s.lightmap.width
         << ", lightmap-subsamples=" << s.lightmap.subsamplesPerAxis << ", emitter-strata=" << s.direct.emitterStrata
         << ", width=" << s.imageWidth << ", height=" << s.imageHeight;
     if (maxComponent(s.sky) > 0.0f) out << ", sky=" << s.sky.x << "," << s.sky.y << "," << s.sky.z;

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "bake/bright_patches.h"
-#include "bake/direct_light.h"
+#include "lighting/direct_light.h"
 #include "bake/gather_visibility.h"
 #include "bake/receivers.h"
 #include "bake/settings_table.h"
@@ -23,6 +23,12 @@ struct BakeOutputs {
     bool images = true;     // camera images (EXR + PNG + AOVs)
     bool grids = true;      // grids.vdb with every channel and the radiance mips
     bool gltf = true;       // scene.glb: the input scene with its lightmaps (export/gltf_export.h)
+};
+
+// Where a lightmap's indirect light is gathered.
+enum class LightmapGather {
+    Texels,  // records on the atlas's own texel lattice (bake/texel_gather.h)
+    Points,  // the voxel gather points, interpolated (cone/irradiance_cache.h), as images are
 };
 
 struct BakeSettings {
@@ -97,6 +103,11 @@ struct BakeSettings {
     // a quarter fewer rays: the bench's default 0.24 s against 0.25 s (12 × 12 took a turned
     // quad box to 3.01%).
     GatherVisibility gatherVisibility = GatherVisibility::Auto;
+    // Texels by default where the final gather goes by rays: a voxel gather point stands for a
+    // 4³-voxel cell's side, and two surfaces facing one way in a cell (a sofa's arm and its
+    // cushion) took its light in blocks (docs/accuracy.md). texelGatherSpacing 0: automatic.
+    LightmapGather lightmapGather = LightmapGather::Texels;
+    int texelGatherSpacing = 0;
     int gatherRays = 14;
     int bounceRays = 14;
     LightmapSettings lightmap;

@@ -1,6 +1,6 @@
 #include "bake/ray_gather.h"
 
-#include "bake/direct_light.h"
+#include "lighting/direct_light.h"
 #include "bake/fan_rays.h"
 #include "bake/shade_element.h"
 
@@ -34,11 +34,7 @@ void checkRays(int raysPerAxis) {
                             std::to_string(kMaxGatherRaysPerAxis));
 }
 
-// Where a point's rays start and the frame they are laid out in.
-struct RayFan {
-    vec3 origin;
-    FanFrame frame;
-};
+using RayFan = FanStart;
 
 RayFan rayFan(const GatherPoint& point, float h, const BvhView& bvh, const TraceSceneView& scene) {
     RayFan fan;
@@ -181,22 +177,20 @@ HitLookup hitLookup(const MipLevelView& level0, size_t voxels) {
 
 }  // namespace
 
-std::vector<vec3> gatherByRays(const std::vector<GatherPoint>& points, const MipView& mips,
-                               const std::vector<FaceRadiance>& faces, const BvhView& bvh, const TraceSceneView& scene,
-                               int raysPerAxis, Progress* progress) {
+std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& mips,
+                             const std::vector<FaceRadiance>& faces, const BvhView& bvh, const TraceSceneView& scene,
+                             int raysPerAxis, Progress* progress) {
     checkRays(raysPerAxis);
-    std::vector<vec3> irradiance(points.size(), vec3(0.0f));
+    std::vector<vec3> irradiance(fans.size(), vec3(0.0f));
     if (mips.levelCount <= 0) return irradiance;
-    const float h = mips.voxelSize;
     const std::vector<vec3> pattern = fanPattern(raysPerAxis);
     const float rays = float(pattern.size());
     const HitLookup level0 = hitLookup(mips.levels[0], faces.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, fans.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
         IndexLeafCache leaves;
         for (size_t q = range.begin(); q != range.end(); ++q) {
-            const RayFan fan = rayFan(points[q], h, bvh, scene);
             vec3 sum(0.0f);
-            traceFan(fan, pattern, bvh, [&](const Ray& ray, const Hit& hit) {
+            traceFan(fans[q], pattern, bvh, [&](const Ray& ray, const Hit& hit) {
                 readHitTexels(level0, leaves, ray.at(hit.t), ray.direction, windingCross(scene, hit.triangle),
                               [&](int32_t voxel, int travel, float weight) {
                                   sum += weight * faces[size_t(voxel)][size_t(travel ^ 1)];
@@ -207,6 +201,15 @@ std::vector<vec3> gatherByRays(const std::vector<GatherPoint>& points, const Mip
         if (progress) progress->advance(range.size());
     });
     return irradiance;
+}
+
+std::vector<vec3> gatherByRays(const std::vector<GatherPoint>& points, const MipView& mips,
+                               const std::vector<FaceRadiance>& faces, const BvhView& bvh, const TraceSceneView& scene,
+                               int raysPerAxis, Progress* progress) {
+    std::vector<FanStart> fans(points.size());
+    const float h = mips.voxelSize;
+    tbb::parallel_for(size_t(0), points.size(), [&](size_t q) { fans[q] = rayFan(points[q], h, bvh, scene); });
+    return gatherFans(fans, mips, faces, bvh, scene, raysPerAxis, progress);
 }
 
 FaceTransport rayTransport(const std::vector<GatherPoint>& points, const MipView& mips, size_t voxelCount,

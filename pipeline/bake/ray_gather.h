@@ -27,7 +27,7 @@
 // the far rays of the bright rooms read the lit room's floor across the wall (room B 0.29% /
 // 0.41% / 0.25% of room A at walls 0.5 / 1 / 2 voxels) for the same Cornell error. A ray that
 // leaves the scene reads nothing: it sees the sky, which the bounces count as direct light
-// (FaceTransport::open) and the receivers trace on their own (bake/direct_light.h).
+// (FaceTransport::open) and the receivers trace on their own (lighting/direct_light.h).
 //
 // Which faces a point's rays read, and with what weight, depends on where surface is, not on
 // the light: the bounces trace each point's fan once into a FaceTransport (rayTransport) and
@@ -47,6 +47,7 @@
 // (gather_visibility.h).
 #pragma once
 
+#include "bake/fan_rays.h"
 #include "bake/gather_visibility.h"
 #include "cone/bounces.h"
 #include "cone/irradiance_cache.h"
@@ -72,6 +73,19 @@ std::vector<vec3> gatherByRays(const std::vector<GatherPoint>& points, const Mip
                                const std::vector<FaceRadiance>& faces, const BvhView& bvh, const TraceSceneView& scene,
                                int raysPerAxis, Progress* progress = nullptr);
 
+// Where a fan of rays starts (on its surface, offset off it: trace/ray_offset.h) and the frame
+// its n × n directions are laid out in (fan_rays.h).
+struct FanStart {
+    vec3 origin{0.0f};
+    FanFrame frame{};
+};
+
+// gatherByRays from fans given directly (a lightmap texel's, bake/texel_gather.h). The same
+// bytes at any thread count; `progress` advances once per fan.
+std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& mips,
+                             const std::vector<FaceRadiance>& faces, const BvhView& bvh, const TraceSceneView& scene,
+                             int raysPerAxis, Progress* progress = nullptr);
+
 // The same gather as a fixed map from the voxels' face light to the points' irradiance
 // (cone/bounces.h FaceTransport): which faces a point's rays read, and how much, does not
 // change while the light does, so the bounces trace once and apply the map at every bounce.
@@ -96,12 +110,12 @@ std::vector<float> skyOpenness(const std::vector<GatherPoint>& points, float vox
                                const TraceSceneView& scene, int raysPerAxis);
 
 // Per point, the sky's irradiance where its rays start (rayFan), by the receivers' estimate
-// (bake/direct_light.h skyIrradiance, `strata`² directions of each kind, seeded by the
+// (lighting/direct_light.h skyIrradiance, `strata`² directions of each kind, seeded by the
 // point's index): for the bounces under a sky with an image, whose light is not one
 // radiance times an openness.
 std::vector<vec3> skyIrradianceAtPoints(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,
                                         const TraceSceneView& scene, int strata);
-// Only its image draws' part (bake/direct_light.h skyImageDrawsIrradiance: `drawsPerAxis`²
+// Only its image draws' part (lighting/direct_light.h skyImageDrawsIrradiance: `drawsPerAxis`²
 // draws against `raysPerAxis`² cosine rays), for the bounces when a FaceTransport's rays give
 // the rest (FaceTransport::skyCosine).
 std::vector<vec3> skyImageDrawsAtPoints(const std::vector<GatherPoint>& points, float voxelSize, const BvhView& bvh,

@@ -3,7 +3,7 @@
 // shadeReceivers (TBB) and the CUDA launcher.
 #pragma once
 
-#include "bake/direct_light.h"
+#include "lighting/direct_light.h"
 #include "bake/fan_rays.h"
 #include "cone/cone_set.h"
 #include "cone/cone_trace.h"

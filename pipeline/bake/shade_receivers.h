@@ -4,7 +4,7 @@
 // sample seeds its own generator, so the result does not depend on the thread count.
 #pragma once
 
-#include "bake/direct_light.h"
+#include "lighting/direct_light.h"
 #include "cone/cone_settings.h"
 #include "cone/irradiance_cache.h"
 #include "cone/radiance_mips.h"

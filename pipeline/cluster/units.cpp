@@ -247,8 +247,8 @@ UnitRecord runReceiverUnit(const BakeJob& job, const std::string& sceneWork, con
         const auto start = std::chrono::steady_clock::now();
         const Scene scene = receiverScene(loadJobScene(job), state);
         const ReceiverScene tracing(scene);
-        const RebuiltGather gather = rebuildGather(state, tracing, settings.gatherRays);
-        const ReceiverShading shading(tracing, gather.mips, gather.cache, settings, state.onGpu);
+        const RebuiltGather gather = rebuildGather(state, tracing, settings);
+        const ReceiverShading shading(tracing, gather.mips, gather.cache, gather.bright, settings, state.onGpu);
         UnitFile file;
         const ReceiverUnit unit = receiverUnit(units, receiver);
         if (unit.atlas >= 0) {

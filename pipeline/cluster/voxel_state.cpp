@@ -1,6 +1,7 @@
 #include "cluster/voxel_state.h"
 
 #include "cluster/unit_file.h"
+#include "lighting/surface_points.h"
 #include "bake/gather_visibility.h"
 #include "bake/ray_gather.h"
 #include "core/error.h"
@@ -223,7 +224,8 @@ Scene receiverScene(Scene loaded, const VoxelState& state) {
     return scene;
 }
 
-RebuiltGather rebuildGather(const VoxelState& state, const ReceiverScene& tracing, int gatherRaysPerAxis) {
+RebuiltGather rebuildGather(const VoxelState& state, const ReceiverScene& tracing, const BakeSettings& settings) {
+    const int gatherRaysPerAxis = settings.gatherRays;
     RebuiltGather gather;
     const VoxelScene& voxels = state.result.voxels;
     // As the bake left them (bakeVoxelStages): level 0 alone where the final gather went by
@@ -239,6 +241,10 @@ RebuiltGather rebuildGather(const VoxelState& state, const ReceiverScene& tracin
                              " gathered points, its voxels give " + std::to_string(gather.cache.points().size()));
         gather.cache.setIrradiance(state.gatheredIrradiance);
         if (byRays) gather.cache.setRaysPerAxis(gatherRaysPerAxis);
+        const bool needPoints = settings.brightPatches.factor > 0.0f;
+        gather.bright = splitBrightPatches(
+            voxels, needPoints ? voxelSurfacePoints(voxels, tracing.traceScene.view(), settings.lighting.surfacePoints) : VoxelSurfacePoints{},
+            settings.brightPatches);
     }
     return gather;
 }

@@ -42,10 +42,13 @@ Scene receiverScene(Scene loaded, const VoxelState& state);
 // with `tracing`'s rays as the bake placed them (enclosedSurfaceProbe), and, where they
 // gathered by rays, level 0 of the mips alone and the receivers no point applies to
 // gathering by `gatherRaysPerAxis`² rays, as in the bake.
+// The bright patches are split off the voxels' light again from their surface points, as the
+// bake split them.
 struct RebuiltGather {
     RadianceMips mips;
     IrradianceCache cache;
+    BrightPatchSplit bright;
 };
-RebuiltGather rebuildGather(const VoxelState& state, const ReceiverScene& tracing, int gatherRaysPerAxis);
+RebuiltGather rebuildGather(const VoxelState& state, const ReceiverScene& tracing, const BakeSettings& settings);
 
 }  // namespace vl::cluster

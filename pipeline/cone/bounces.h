@@ -97,7 +97,7 @@ struct FaceTransport {
     // a uniform sky (π where nothing blocks it). Empty where the builder does not know it.
     std::vector<float> open;
     // Per point, an image sky's light through those rays, each an image sky's share against
-    // the image draws that join them (bake/direct_light.h skyShare). Empty without an image sky.
+    // the image draws that join them (lighting/direct_light.h skyShare). Empty without an image sky.
     std::vector<vec3> skyCosine;
     size_t pointCount() const { return begin.size() - 1; }
 };
@@ -106,7 +106,7 @@ struct FaceTransport {
 // their direct light before the first bounce, interpolated to the voxels' sides as the
 // bounces' irradiance is. At every gather point that is, for a uniform sky, radiance × the
 // point's openness (a FaceTransport's `open`, else `openness` of the points); for a sky with
-// an image, `irradiance` of the points (the receivers' estimate, bake/direct_light.h), or,
+// an image, `irradiance` of the points (the receivers' estimate, lighting/direct_light.h), or,
 // where the transport's rays already hold their part (FaceTransport::skyCosine), those plus
 // `imageDraws` of the points.
 struct BounceSky {

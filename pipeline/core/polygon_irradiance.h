@@ -1,6 +1,6 @@
 // Lambert's closed form for the irradiance a uniformly emitting polygon gives a point: the
 // exact unshadowed direct light of an emissive triangle, for the bake's receivers
-// (bake/direct_light.h) and the voxel lighting pass (lighting/lighting_kernels.h).
+// (lighting/direct_light.h) and the voxel lighting pass (lighting/lighting_kernels.h).
 #pragma once
 
 #include "core/math.h"

@@ -1,6 +1,6 @@
 // Two triangles that share an edge, as a quad split along its diagonal is exported: the
 // emitters' patches (lighting/lighting.cpp) and the receivers' parallelogram quads
-// (trace/trace_scene.cpp, bake/direct_light.h) are found and laid out from this.
+// (trace/trace_scene.cpp, lighting/direct_light.h) are found and laid out from this.
 #pragma once
 
 #include "core/hostdev.h"

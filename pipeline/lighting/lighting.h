@@ -43,7 +43,19 @@ struct AttenuationCoefficients {
     float quadratic = 1.0f;
 };
 
+// How the voxel pass finds what blocks a light.
+enum class VoxelVisibility {
+    Rays,      // shadow rays against the triangles from points on each voxel side's surface (surface_light.h)
+    Stepping,  // ERRATA eq. 17: a walk through the voxels' opacity toward the light (the paper's)
+};
+
 struct LightingSettings {
+    // Rays by default: a walk through the voxels sees thin occluders (window frames, mullions)
+    // as partly open and weighs them down with distance; on the grey-white room's sun the
+    // stepping pass reflected 1.28 times the exact light (docs/accuracy.md).
+    VoxelVisibility visibilityBy = VoxelVisibility::Rays;
+    // By rays: about this many surface points per h² of each triangle's area (surface_points.h).
+    int surfacePoints = 4;
     // Lambert by default: it is exact on a flat surface of any orientation. Six-axis keeps a
     // 90° corner's total but lights a tilted wall by 1/‖n‖₁ of its cosine: a turned closed
     // room kept 70–76 % of its indirect power with it, 91–101 % with Lambert; on the

@@ -621,7 +621,7 @@ VL_HOSTDEV inline VoxelLighting shadeVoxel(const LightingView& view, IndexAccess
         }
         // A uniform emitter: its exact unshadowed irradiance times the fraction of the
         // samples' contribution that arrives unshadowed. Fully lit or fully shadowed sides
-        // are then exact; only penumbrae carry the samples' error (bake/direct_light.h does
+        // are then exact; only penumbrae carry the samples' error (lighting/direct_light.h does
         // the same at the receivers). A textured emitter keeps the plain stratified sum.
         for (int s = 0; s < sides.count; ++s) {
             if (!tri.uniform) {

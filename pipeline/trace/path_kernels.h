@@ -58,6 +58,54 @@ VL_HOSTDEV inline float rangeWindow(float distance2, float range) {
     return glm::clamp(1.0f - ratio2 * ratio2, 0.0f, 1.0f);
 }
 
+// What a punctual light (a sun's disk drawn at `disk`) brings to p before its shadow ray: the
+// direction toward it, its irradiance E·cos θ (zero under the horizon of ns or ng) and where
+// the shadow ray ends (toInfinity for a directional light).
+struct PunctualArrival {
+    vec3 wi{0.0f};
+    vec3 irradiance{0.0f};
+    vec3 target{0.0f};
+    bool toInfinity = false;
+};
+VL_HOSTDEV inline PunctualArrival punctualArrival(const TraceLight& light, const vec3& p, const vec3& ng, const vec3& ns,
+                                                  vec2 disk) {
+    PunctualArrival a;
+    vec3 e;
+    if (light.type == TraceLightType::Directional) {
+        a.wi = -light.direction;
+        if (light.cosHalfAngle < 1.0f) a.wi = coneDirectionAbout(a.wi, light.cosHalfAngle, disk);
+        e = light.intensity;
+        a.toInfinity = true;
+    } else {
+        const vec3 d = light.position - p;
+        const float r2 = glm::dot(d, d);
+        if (!(r2 > 0.0f)) return a;
+        a.wi = d / glm::sqrt(r2);
+        float falloff = rangeWindow(r2, light.range) / r2;
+        if (light.type == TraceLightType::Spot) {
+            const float t = glm::clamp(glm::dot(light.direction, -a.wi) * light.spotScale + light.spotOffset, 0.0f, 1.0f);
+            falloff *= t * t;
+        }
+        e = light.intensity * falloff;
+        a.target = light.position;
+    }
+    const float cosS = glm::dot(ns, a.wi);
+    if (cosS <= 0.0f || glm::dot(ng, a.wi) <= 0.0f || !(maxComponent(e) > 0.0f)) return a;
+    a.irradiance = e * cosS;
+    return a;
+}
+
+// Whether the shadow ray of an arrival is blocked.
+VL_HOSTDEV inline bool arrivalBlocked(const BvhView& bvh, const PunctualArrival& a, const vec3& p, const vec3& ng) {
+    if (a.toInfinity) {
+        Ray ray;
+        ray.origin = offsetRayOrigin(p, ng, bvh.extent);
+        ray.direction = a.wi;
+        return intersectAny(bvh, ray);
+    }
+    return occluded(bvh, p, ng, a.target, vec3(0.0f));
+}
+
 // One punctual light's incident radiance × cos θ at a point (irradiance, shadowed), for a
 // diffuse lobe about ns on the side of ng. A directional light with a disk (cosHalfAngle < 1)
 // arrives from the direction of its cone that `disk`, a point of the unit disk, stands for
@@ -65,40 +113,9 @@ VL_HOSTDEV inline float rangeWindow(float distance2, float range) {
 // penumbrae included.
 VL_HOSTDEV inline vec3 punctualLightIrradiance(const BvhView& bvh, const TraceLight& light, const vec3& p,
                                                const vec3& ng, const vec3& ns, vec2 disk) {
-    vec3 wi;
-    vec3 e;
-    vec3 target(0.0f);
-    bool toInfinity = false;
-    if (light.type == TraceLightType::Directional) {
-        wi = -light.direction;
-        if (light.cosHalfAngle < 1.0f) wi = coneDirectionAbout(wi, light.cosHalfAngle, disk);
-        e = light.intensity;
-        toInfinity = true;
-    } else {
-        const vec3 d = light.position - p;
-        const float r2 = glm::dot(d, d);
-        if (!(r2 > 0.0f)) return vec3(0.0f);
-        wi = d / glm::sqrt(r2);
-        float falloff = rangeWindow(r2, light.range) / r2;
-        if (light.type == TraceLightType::Spot) {
-            const float t = glm::clamp(glm::dot(light.direction, -wi) * light.spotScale + light.spotOffset, 0.0f, 1.0f);
-            falloff *= t * t;
-        }
-        e = light.intensity * falloff;
-        target = light.position;
-    }
-    const float cosS = glm::dot(ns, wi);
-    if (cosS <= 0.0f || glm::dot(ng, wi) <= 0.0f || !(maxComponent(e) > 0.0f)) return vec3(0.0f);
-    bool blocked;
-    if (toInfinity) {
-        Ray ray;
-        ray.origin = offsetRayOrigin(p, ng, bvh.extent);
-        ray.direction = wi;
-        blocked = intersectAny(bvh, ray);
-    } else {
-        blocked = occluded(bvh, p, ng, target, vec3(0.0f));
-    }
-    return blocked ? vec3(0.0f) : e * cosS;
+    const PunctualArrival a = punctualArrival(light, p, ng, ns, disk);
+    if (!(maxComponent(a.irradiance) > 0.0f)) return vec3(0.0f);
+    return arrivalBlocked(bvh, a, p, ng) ? vec3(0.0f) : a.irradiance;
 }
 
 // Σ over punctual lights, a sun's disk sampled uniformly at `u` ∈ [0, 1)².

@@ -1,6 +1,6 @@
-// The receivers' exact direct term (bake/direct_light.h) against closed forms: a square light
+// The receivers' exact direct term (lighting/direct_light.h) against closed forms: a square light
 // over a floor, a ledge half way up casting a penumbra across it.
-#include "bake/direct_light.h"
+#include "lighting/direct_light.h"
 #include "scene/scene.h"
 #include "support/form_factor.h"
 #include "tests/bake/quad_scene.h"

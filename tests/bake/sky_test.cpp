@@ -4,7 +4,7 @@
 // ../shared/reference (cornell_sky.gltf, world radiance (0.6, 0.75, 1.0)).
 #include "bake/bake.h"
 #include "bake/bake_settings.h"
-#include "bake/direct_light.h"
+#include "lighting/direct_light.h"
 #include "bake/job_file.h"
 #include "bake/receivers.h"
 #include "core/error.h"

@@ -16,6 +16,7 @@
 #include "bake/bake.h"
 #include "bake/bake_settings.h"
 #include "bake/bright_patches.h"
+#include "lighting/surface_points.h"
 #include "cone/cone_trace.h"
 #include "cone/irradiance_cache.h"
 #include "core/error.h"
@@ -118,7 +119,8 @@ int main(int argc, char** argv) {
             everyFace.factor = hotFactor;
             everyFace.cellVoxels = 1;
             everyFace.maxPatches = std::numeric_limits<int>::max();
-            const BrightPatchSplit split = splitBrightPatches(baked.voxels, everyFace);
+            const BrightPatchSplit split =
+                splitBrightPatches(baked.voxels, voxelSurfacePoints(baked.voxels, traced.view(), 4), everyFace);
             hotFaces = split.faces;
             rest.faceRadiance = split.restFaces;
             rest.radiance = split.restRadiance;

@@ -362,3 +362,97 @@ VL_HOSTDEV inline vec3 directIrradiance(const TraceSceneView& s, const BvhView& 
 }
 
 }  // namespace vl
+
+namespace vl {
+
+// Direct irradiance at one of many points that average over a surface together (a voxel
+// side's points, lighting/surface_points.h), without the sky: every light, a sun's disk and
+// every emitter patch seen through one shadow ray, placed at u ∈ [0, 1)² (a point of the
+// disk, of the quad or triangle), so that the points of one surface, each with its own u,
+// stratify what one point alone would sample. An emitter's unshadowed light is exact (Lambert's
+// polygon formula) and the ray scales it by its visibility, as the receivers' ratio estimator
+// does with one stratum. `layer`: an emitter whose plane lies within it of p, facing p's
+// surface, is the cover of that surface, not light it shows (a quad light mounted flat under a
+// ceiling lights the ceiling it hides, and a voxel holding both would show that light where
+// the emitter is); 0 lights every emitter. `rays` and `blocked`, when given, count the shadow
+// rays that emitters and lights took (those with light to bring) and those that were blocked.
+VL_HOSTDEV inline vec3 surfacePointIrradiance(const TraceSceneView& s, const BvhView& bvh, const vec3& p, const vec3& ng,
+                                              const vec3& ns, vec2 u, float layer, uint64_t seed,
+                                              uint32_t* rays = nullptr, uint32_t* blocked = nullptr) {
+    vec3 e(0.0f);
+    for (uint32_t i = 0; i < s.lightCount; ++i) {
+        const vec2 disk = s.lights[i].cosHalfAngle < 1.0f ? sampleConcentricDisk(u) : vec2(0.0f);
+        const PunctualArrival arrival = punctualArrival(s.lights[i], p, ng, ns, disk);
+        if (!(maxComponent(arrival.irradiance) > 0.0f)) continue;
+        const bool hidden = arrivalBlocked(bvh, arrival, p, ng);
+        if (!hidden) e += arrival.irradiance;
+        if (rays) {
+            ++*rays;
+            if (hidden) ++*blocked;
+        }
+    }
+    if (s.emitterCount > kMaxVisitedEmitters) return e + sampledEmittersIrradiance(s, bvh, p, ng, ns, 1, seed);
+    for (uint32_t k = 0; k < s.emitterCount; ++k) {
+        const int8_t quad = s.emitterQuad ? s.emitterQuad[k] : kQuadSingle;
+        if (quad == kQuadSecondHalf) continue;
+        const uint32_t first = s.emitters[k];
+        const vec3* v = s.vertices + 3 * size_t(first);
+        const vec3 cross = glm::cross(v[1] - v[0], v[2] - v[0]);
+        const float twiceArea = glm::length(cross);
+        if (!(twiceArea > 0.0f)) continue;
+        const vec3 emitterNormal = cross / twiceArea;
+        const TraceMaterial& material = s.materials[s.materialIds[first]];
+        const float facing = glm::dot(p - v[0], emitterNormal);
+        if (facing == 0.0f || (facing < 0.0f && !material.doubleSided)) continue;
+        const vec3 towardReceiver = facing > 0.0f ? emitterNormal : -emitterNormal;
+        if (glm::abs(facing) < layer && glm::dot(ns, towardReceiver) < -0.5f) continue;
+        // The patch: the quad's two halves, or the triangle; its unshadowed light and a point of it.
+        float unshadowed = 0.0f;
+        vec3 point;
+        if (quad == kQuadFirstHalf) {
+            const uint32_t second = s.emitters[k + 1];
+            const vec3* w = s.vertices + 3 * size_t(second);
+            for (const vec3* t : {v, w}) {
+                const vec3 relative[3] = {t[0] - p, t[1] - p, t[2] - p};
+                unshadowed += clippedTriangleIrradiance(relative, ns);
+            }
+            const int own = sharedEdge(v, w).ownA;
+            point = v[own] + u.x * (v[(own + 1) % 3] - v[own]) + u.y * (v[(own + 2) % 3] - v[own]);
+        } else {
+            const vec3 relative[3] = {v[0] - p, v[1] - p, v[2] - p};
+            unshadowed = clippedTriangleIrradiance(relative, ns);
+            const vec2 b = sampleUniformTriangle(u);
+            point = (1.0f - b.x - b.y) * v[0] + b.x * v[1] + b.y * v[2];
+        }
+        if (!(unshadowed > 0.0f)) continue;
+        vec3 radiance = material.emission;
+        if (material.emissiveTexture.texture >= 0) {
+            // Textured: the radiance where the ray lands (one stratum of the plain estimate).
+            const vec2 b = sampleUniformTriangle(u);
+            const SurfaceHit at = surfaceAt(s, first, b.x, b.y);
+            point = at.position;
+            radiance = emissionAt(s, at, glm::normalize(p - point));
+        }
+        // A point under the horizon cannot tell the patch's visibility: its centre does.
+        const auto above = [&](const vec3& q) {
+            const vec3 wi = q - p;
+            return glm::dot(ns, wi) > 0.0f && glm::dot(ng, wi) > 0.0f && -glm::dot(towardReceiver, wi) > 0.0f;
+        };
+        if (!above(point)) {
+            point = quad == kQuadFirstHalf
+                        ? 0.5f * (v[(sharedEdge(v, s.vertices + 3 * size_t(s.emitters[k + 1])).ownA + 1) % 3] +
+                                  v[(sharedEdge(v, s.vertices + 3 * size_t(s.emitters[k + 1])).ownA + 2) % 3])
+                        : (v[0] + v[1] + v[2]) * (1.0f / 3.0f);
+            if (!above(point)) continue;
+        }
+        const bool hidden = occluded(bvh, p, ng, point, towardReceiver);
+        if (!hidden) e += radiance * unshadowed;
+        if (rays) {
+            ++*rays;
+            if (hidden) ++*blocked;
+        }
+    }
+    return e;
+}
+
+}  // namespace vl
