@@ -2,6 +2,7 @@
 
 #include "bake/bright_patches.h"
 #include "bake/dilate.h"
+#include "bake/lightmap_image.h"
 #include "bake/ray_gather.h"
 #include "bake/shade_receivers.h"
 #include "bake/texel_gather.h"
@@ -382,6 +383,11 @@ std::vector<Camera> bakeCameras(const Scene& scene, const BakeSettings& settings
     return cameras;
 }
 
+CameraReceivers bakeCameraReceivers(const TraceScene& scene, const Bvh& bvh, const CameraModel& camera,
+                                    const BakeSettings& settings) {
+    return buildCameraReceivers(scene, bvh, camera, settings.imageSubsamples, kEmissionSubsamples, true);
+}
+
 ReceiverShading::ReceiverShading(const ReceiverScene& tracing, const RadianceMips& mips, const IrradianceCache& cache,
                                  const BrightPatchSplit& bright, const BakeSettings& settings, bool onGpu)
     : tracing_(tracing),
@@ -442,8 +448,7 @@ ReceiverLighting ReceiverShading::shadeAtlasRows(const LightmapAtlas& atlas, int
 
 BakedImage ReceiverShading::shadeCamera(const Camera& camera) const {
     const CameraModel model = makeCameraModel(camera, settings_.imageWidth, settings_.imageHeight);
-    const CameraReceivers receivers = buildCameraReceivers(tracing_.traceScene, tracing_.bvh, model,
-                                                           settings_.imageSubsamples, kEmissionSubsamples, true);
+    const CameraReceivers receivers = bakeCameraReceivers(tracing_.traceScene, tracing_.bvh, model, settings_);
     Progress progress("image", receivers.receivers.elementCount(), settings_.quiet);
     const TraceSceneView sceneView = tracing_.traceScene.view();
     const BvhView bvhView = tracing_.bvh.view();
@@ -454,7 +459,7 @@ BakedImage ReceiverShading::shadeCamera(const Camera& camera) const {
                                 settings_.direct, false, &progress);
     progress.finish();
     return {camera.name, sumRgb(sumRgb(receivers.emission, lit.directRadiance), lit.indirectRadiance),
-            lit.directRadiance, lit.indirectRadiance, receivers.albedo};
+            lit.directRadiance, lit.indirectRadiance, receivers.albedo, Image()};
 }
 
 BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, const Image& indirect) {
@@ -464,6 +469,24 @@ BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, co
     // edges does not bleed black.
     for (Image* image : {&baked.total, &baked.direct, &baked.indirect}) dilatePadding(*image, atlas.mask);
     return baked;
+}
+
+bool makesLightmapImages(const BakeSettings& settings) {
+    return settings.outputs.lightmapImage && settings.outputs.lightmaps && settings.outputs.images;
+}
+
+void addLightmapImages(const Scene& scene, const ReceiverScene& tracing, const BakeSettings& settings,
+                       BakeResult& result) {
+    std::vector<ShippedLightmap> shipped;
+    for (const BakedLightmap& lightmap : result.lightmaps)
+        shipped.push_back({lightmap.meshes, shippedLightmapTexels(lightmap.total)});
+    const std::vector<Camera> cameras = bakeCameras(scene, settings);
+    for (size_t c = 0; c < cameras.size() && c < result.images.size(); ++c) {
+        // The receivers of shadeCamera again: the same rays, so the two images compare pixel for pixel.
+        const CameraModel model = makeCameraModel(cameras[c], settings.imageWidth, settings.imageHeight);
+        const CameraReceivers receivers = bakeCameraReceivers(tracing.traceScene, tracing.bvh, model, settings);
+        result.images[c].lightmapped = renderLightmapImage(receivers, scene, tracing.triangles, shipped);
+    }
 }
 
 BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnostics) {
@@ -485,6 +508,11 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
             return 0;
         });
     }
+    if (makesLightmapImages(settings))
+        timed(result.stages, "lightmap image", [&] {
+            addLightmapImages(scene, *stages.tracing, settings, result);
+            return 0;
+        });
     return std::move(result);
 }
 

@@ -54,6 +54,7 @@ struct BakedImage {
     Image direct;    // albedo·E_direct/π
     Image indirect;  // albedo·E_indirect/π
     Image albedo;
+    Image lightmapped;  // RGB radiance lit by the shipped lightmaps (bake/lightmap_image.h); empty: not made
 };
 
 struct BakeResult {
@@ -111,6 +112,12 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
 // The cameras a bake renders: the scene's, else one looking at its bounds.
 std::vector<Camera> bakeCameras(const Scene& scene, const BakeSettings& settings);
 
+// A camera's receivers as the bake shades its image: settings.imageSubsamples² primary rays
+// per pixel, one sample per triangle a pixel sees, emitters and the sky seen directly on a
+// finer grid (bake.cpp).
+CameraReceivers bakeCameraReceivers(const TraceScene& scene, const Bvh& bvh, const CameraModel& camera,
+                                    const BakeSettings& settings);
+
 // Receivers lit from the voxel stages' mips and gather.
 class ReceiverShading {
 public:
@@ -140,6 +147,16 @@ private:
 // An atlas's finished images from its receivers' direct and indirect light: the total, and
 // padding texels dilated from their covered neighbours in all three.
 BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, const Image& indirect);
+
+// Whether a bake with these settings renders its cameras' lightmap-lit images: it asks for
+// them and bakes both lightmaps and images.
+bool makesLightmapImages(const BakeSettings& settings);
+
+// Each camera image's lightmap-lit twin (bake/lightmap_image.h) into result.images[c].lightmapped,
+// from result.lightmaps as they ship; the cameras are bakeCameras(scene, settings), the order
+// of result.images. A local bake and a cluster bake's merge both call this.
+void addLightmapImages(const Scene& scene, const ReceiverScene& tracing, const BakeSettings& settings,
+                       BakeResult& result);
 
 // Checks that cost nothing (settings ranges, voxel count, memory) run first; throws
 // SettingsError / InputError before any expensive stage.

@@ -243,6 +243,10 @@ void writeBakeFiles(const BakeJob& job, BakeResult& result, const ExportSource& 
         files.exr(image.indirect, stem + "_indirect.exr");
         files.exr(image.albedo, stem + "_albedo.exr");
         files.png(image.beauty, stem + ".png");
+        if (!image.lightmapped.empty()) {
+            files.exr(image.lightmapped, stem + "_lightmapped.exr");
+            files.png(image.lightmapped, stem + "_lightmapped.png");
+        }
     }
     if (settings.outputs.grids) {
         result.voxels.sourceScene = job.scenePath;

@@ -158,6 +158,8 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.outputs.lightmaps = parseBoolSetting("lightmaps", v); }},
         {"images", "write camera images (default true)",
          [](S& s, const std::string& v) { s.outputs.images = parseBoolSetting("images", v); }},
+        {"lightmap-image", "write image_lightmapped.exr and .png: each camera lit by its lightmaps as scene.glb carries them, albedo x lightmap + emission, as the viewer shows it; needs lightmaps and images (default true)",
+         [](S& s, const std::string& v) { s.outputs.lightmapImage = parseBoolSetting("lightmap-image", v); }},
         {"grids", "write grids.vdb (default true)",
          [](S& s, const std::string& v) { s.outputs.grids = parseBoolSetting("grids", v); }},
         {"lightmap-uvs", "generate TEXCOORD_1 charts for a scene none of whose meshes has one (default true)",

@@ -23,6 +23,9 @@ struct BakeOutputs {
     bool images = true;     // camera images (EXR + PNG + AOVs)
     bool grids = true;      // grids.vdb with every channel and the radiance mips
     bool gltf = true;       // scene.glb: the input scene with its lightmaps (export/gltf_export.h)
+    // Each camera lit by the lightmaps as scene.glb carries them (bake/lightmap_image.h): what
+    // the viewer shows, to measure the lightmap by. Needs lightmaps and images.
+    bool lightmapImage = true;
 };
 
 // Where a lightmap's indirect light is gathered.

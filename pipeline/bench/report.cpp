@@ -70,13 +70,24 @@ void writeText(const fs::path& path, const std::string& text) {
 
 using Series = std::vector<std::pair<double, double>>;
 
+// What a series rates: the lightmap, the image, or the lightmap-lit image (timed as its lightmap).
+enum class Rated { Lightmap, Image, Lightmapped };
+
+double secondsOf(const BenchPointResult& p, Rated rated) {
+    return rated == Rated::Image ? p.imageSeconds : p.lightmapSeconds;
+}
+
+const BenchError& errorOf(const BenchPointResult& p, Rated rated) {
+    return rated == Rated::Image ? p.image : rated == Rated::Lightmap ? p.lightmap : p.lightmapped;
+}
+
 // (time, relRMSE) of a method's points that measured both.
-Series series(const BenchResult& r, const std::string& method, bool image, std::vector<size_t>* indices = nullptr) {
+Series series(const BenchResult& r, const std::string& method, Rated rated, std::vector<size_t>* indices = nullptr) {
     Series s;
     for (size_t i = 0; i < r.points.size(); ++i) {
         const BenchPointResult& p = r.points[i];
-        const double t = image ? p.imageSeconds : p.lightmapSeconds;
-        const BenchError& e = image ? p.image : p.lightmap;
+        const double t = secondsOf(p, rated);
+        const BenchError& e = errorOf(p, rated);
         if (p.spec.method != method || !p.ok || !(t > 0.0) || !e.available) continue;
         s.push_back({t, e.metrics.relativeRmse});
         if (indices) indices->push_back(i);
@@ -101,7 +112,7 @@ void writeCsv(BenchResult& r) {
     for (const MethodStyle& m : kMethods)
         for (bool image : {false, true}) {
             std::vector<size_t> idx;
-            const Series s = series(r, m.method, image, &idx);
+            const Series s = series(r, m.method, image ? Rated::Image : Rated::Lightmap, &idx);
             for (size_t f : paretoFront(s)) fronts[{m.method, image}].push_back(idx[f]);
         }
     auto onFront = [&](size_t i, bool image) {
@@ -120,7 +131,7 @@ void writeCsv(BenchResult& r) {
         f.push_back(p.imageSeconds > 0 ? number(p.imageSeconds) : "");
         f.push_back(p.cpuSeconds > 0 ? number(p.cpuSeconds) : "");
         f.push_back(p.peakMemoryBytes > 0 ? number(p.peakMemoryBytes / 1048576.0) : "");
-        for (const BenchError* e : {&p.lightmap, &p.lightmapIndirect, &p.image, &p.imageIndirect}) {
+        for (const BenchError* e : {&p.lightmap, &p.lightmapIndirect, &p.image, &p.imageIndirect, &p.lightmapped}) {
             f.push_back(e->available ? number(e->metrics.relativeRmse) : "");
             f.push_back(e->available ? number(e->metrics.relMse) : "");
             f.push_back(e->available ? number(e->metrics.smape) : "");
@@ -204,6 +215,7 @@ void writeJson(BenchResult& r, const nlohmann::json& headline) {
                           {"voxel_size", p.voxelSize}, {"voxel_size_set_by", p.voxelSizeSetBy},
                           {"lightmap", errorJson(p.lightmap)}, {"lightmap_indirect", errorJson(p.lightmapIndirect)},
                           {"image", errorJson(p.image)}, {"image_indirect", errorJson(p.imageIndirect)},
+                          {"lightmapped", errorJson(p.lightmapped)},
                           {"outputs", displayPath(p.outputDir, r.outputDir)}});
     }
     j["points"] = points;
@@ -257,8 +269,8 @@ void writeHeatMap(const Image& test, const Image& reference, const Image& mask, 
 }
 
 struct HeatMap {
-    std::string method, label, lightmapPng, imagePng;
-    std::string lightmapError, imageError;
+    std::string method, label, lightmapPng, imagePng, lightmappedPng;
+    std::string lightmapError, imageError, lightmappedError;
 };
 
 std::vector<HeatMap> writeHeatMaps(BenchResult& r, float excludeAbove) {
@@ -279,7 +291,7 @@ std::vector<HeatMap> writeHeatMaps(BenchResult& r, float excludeAbove) {
     const fs::path dir = fs::path(r.outputDir) / "heatmaps";
     fs::create_directories(dir);
     for (const BenchPointResult* p : chosen) {
-        HeatMap h{p->spec.method, p->spec.label, "", "", pct(p->lightmap), pct(p->image)};
+        HeatMap h{p->spec.method, p->spec.label, "", "", "", pct(p->lightmap), pct(p->image), pct(p->lightmapped)};
         std::string stem = p->spec.method + "-" + p->spec.label;
         for (char& c : stem)
             if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '.') c = '_';
@@ -298,15 +310,24 @@ std::vector<HeatMap> writeHeatMaps(BenchResult& r, float excludeAbove) {
             h.lightmapPng = "heatmaps/" + stem + "_lightmap.png";
             r.files.push_back(h.lightmapPng);
         }
-        if (!image.empty() && r.reference.hasImage && p->image.available) {
-            Image mask(r.reference.image.width, r.reference.image.height, 1, 1.0f);
-            for (int y = 0; y < mask.height; ++y)
-                for (int x = 0; x < mask.width; ++x)
+        Image imageMask;
+        if (r.reference.hasImage) {
+            imageMask = Image(r.reference.image.width, r.reference.image.height, 1, 1.0f);
+            for (int y = 0; y < imageMask.height; ++y)
+                for (int x = 0; x < imageMask.width; ++x)
                     for (int c = 0; c < std::min(3, r.reference.image.channels); ++c)
-                        if (excludeAbove > 0.0f && r.reference.image.at(x, y, c) > excludeAbove) mask.at(x, y) = 0.0f;
-            writeHeatMap(readImage(image), r.reference.image, mask, dir / (stem + "_image"));
+                        if (excludeAbove > 0.0f && r.reference.image.at(x, y, c) > excludeAbove) imageMask.at(x, y) = 0.0f;
+        }
+        if (!image.empty() && r.reference.hasImage && p->image.available) {
+            writeHeatMap(readImage(image), r.reference.image, imageMask, dir / (stem + "_image"));
             h.imagePng = "heatmaps/" + stem + "_image.png";
             r.files.push_back(h.imagePng);
+        }
+        const std::string lightmapped = find({"image_lightmapped.exr"});
+        if (!lightmapped.empty() && r.reference.hasImage && p->lightmapped.available) {
+            writeHeatMap(readImage(lightmapped), r.reference.image, imageMask, dir / (stem + "_lightmapped"));
+            h.lightmappedPng = "heatmaps/" + stem + "_lightmapped.png";
+            r.files.push_back(h.lightmappedPng);
         }
         maps.push_back(h);
     }
@@ -325,19 +346,25 @@ void writePlot(BenchResult& r, const BenchOptions& options) {
     std::ostringstream gp;
     gp << "# gnuplot script written by voxlight bench; run from the bench folder (this folder's parent): gnuplot "
           "plot/bench.gp\n";
-    gp << "set terminal pngcairo size 1500,620 font 'sans,10' noenhanced\nset output 'bench.png'\n";
-    gp << "set multiplot layout 1,2 title \"" << fs::path(r.scenePath).filename().string()
+    gp << "set terminal pngcairo size 2200,620 font 'sans,10' noenhanced\nset output 'bench.png'\n";
+    gp << "set multiplot layout 1,3 title \"" << fs::path(r.scenePath).filename().string()
        << ": wall time (median) against relative RMSE vs the reference; lines join each method's Pareto front\"\n";
     gp << "set logscale xy\nset grid xtics ytics mxtics mytics lc rgb '#dddddd'\nset key top right box opaque\n";
     gp << "set xlabel 'seconds (wall, this machine)'\nset ylabel 'relative RMSE (%)'\n";
-    for (bool image : {false, true}) {
-        gp << "set title '" << (image ? "camera image (emitter excluded)" : "lightmap (covered texels)") << "'\n";
+    const std::pair<Rated, const char*> panels[] = {
+        {Rated::Lightmap, "lightmap (covered texels)"},
+        {Rated::Image, "camera image (emitter excluded)"},
+        {Rated::Lightmapped, "lightmap-lit image vs the reference image (time: the lightmap)"}};
+    for (const auto& [rated, title] : panels) {
+        gp << "set title '" << title << "'\n";
         std::vector<std::string> plots;
         for (const MethodStyle& m : kMethods) {
             std::vector<size_t> idx;
-            const Series s = series(r, m.method, image, &idx);
+            const Series s = series(r, m.method, rated, &idx);
             if (s.empty()) continue;
-            const std::string base = std::string(m.method) + (image ? "_image" : "_lightmap");
+            const std::string base = std::string(m.method) + (rated == Rated::Image         ? "_image"
+                                                              : rated == Rated::Lightmap ? "_lightmap"
+                                                                                         : "_lightmapped");
             std::ostringstream data, front;
             for (size_t i = 0; i < s.size(); ++i)
                 data << number(s[i].first) << ' ' << number(100.0 * s[i].second) << " \"" << r.points[idx[i]].spec.label << "\"\n";
@@ -444,14 +471,17 @@ nlohmann::json headline(const BenchResult& r, std::string& markdown) {
     // The outputs the VCT default measured: the lightmap, the image, each with its error and time.
     struct Output {
         const char* name;
-        bool image;
+        const char* key;  // bench.json's
+        Rated rated;
         const BenchError& error;
-        const BenchError& indirect;
+        const BenchError* indirect;
         double seconds;
     };
     std::vector<Output> outputs;
-    for (const Output& o : {Output{"lightmap", false, vct->lightmap, vct->lightmapIndirect, vct->lightmapSeconds},
-                            Output{"image", true, vct->image, vct->imageIndirect, vct->imageSeconds}})
+    for (const Output& o : {Output{"lightmap", "lightmap", Rated::Lightmap, vct->lightmap, &vct->lightmapIndirect, vct->lightmapSeconds},
+                            Output{"image", "image", Rated::Image, vct->image, &vct->imageIndirect, vct->imageSeconds},
+                            Output{"lightmap-lit image", "lightmapped", Rated::Lightmapped, vct->lightmapped, nullptr,
+                                   vct->lightmapSeconds}})
         if (o.error.available && o.seconds > 0.0) outputs.push_back(o);
     if (outputs.empty()) return h;
 
@@ -460,22 +490,23 @@ nlohmann::json headline(const BenchResult& r, std::string& markdown) {
     md << "- **VCT default bake**:";
     for (size_t i = 0; i < outputs.size(); ++i) {
         const Output& o = outputs[i];
-        h["vct_default"][std::string(o.name) + "_relative_rmse"] = o.error.metrics.relativeRmse;
-        h["vct_default"][std::string(o.name) + "_seconds"] = o.seconds;
-        md << (i ? ";" : "") << ' ' << o.name << " relative RMSE **" << pct(o.error) << "** in **" << secs(o.seconds)
-           << " s** (indirect part " << pct(o.indirect) << ")";
+        h["vct_default"][std::string(o.key) + "_relative_rmse"] = o.error.metrics.relativeRmse;
+        h["vct_default"][std::string(o.key) + "_seconds"] = o.seconds;
+        md << (i ? ";" : "") << ' ' << o.name << " relative RMSE **" << pct(o.error) << "**";
+        if (o.indirect) md << " in **" << secs(o.seconds) << " s** (indirect part " << pct(*o.indirect) << ")";
+        else md << " (against the reference image, from the lightmap as it ships)";
     }
     md << "; the whole bake: " << secs(vct->cpuSeconds) << " CPU s.\n";
     for (const MethodStyle& m : kMethods) {
         if (std::string(m.method) == "vct") continue;
         std::ostringstream lines;
         for (const Output& o : outputs) {
-            const Series s = series(r, m.method, o.image);
+            const Series s = series(r, m.method, o.rated);
             if (s.empty()) continue;
             const double e = o.error.metrics.relativeRmse, t = o.seconds;
             const Reach same = timeToReach(s, e);
             const Reach atTime = errorAtTime(s, t);
-            h[m.method][o.name] = {
+            h[m.method][o.key] = {
                 {"seconds_to_reach_vct_error", same.found ? nlohmann::json(same.seconds) : nlohmann::json(nullptr)},
                 {"how", same.how},
                 {"time_ratio", same.found ? nlohmann::json(same.seconds / t) : nlohmann::json(nullptr)},
@@ -499,12 +530,13 @@ nlohmann::json headline(const BenchResult& r, std::string& markdown) {
 std::string table(const BenchResult& r, bool markdown) {
     std::ostringstream out;
     if (markdown) {
-        out << "| method | point | lightmap s | lightmap relRMSE | indirect relRMSE | image s | image relRMSE | CPU s | peak MB |\n";
-        out << "|---|---|---:|---:|---:|---:|---:|---:|---:|\n";
+        out << "| method | point | lightmap s | lightmap relRMSE | indirect relRMSE | image s | image relRMSE | "
+               "lightmap-lit relRMSE | CPU s | peak MB |\n";
+        out << "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     } else {
         char line[256];
-        std::snprintf(line, sizeof line, "%-13s %-32s %9s %8s %8s %9s %8s %8s %8s\n", "method", "point", "lightmap", "error",
-                      "indirect", "image", "error", "CPU s", "peak MB");
+        std::snprintf(line, sizeof line, "%-13s %-32s %9s %8s %8s %9s %8s %8s %8s %8s\n", "method", "point", "lightmap",
+                      "error", "indirect", "image", "error", "lm-lit", "CPU s", "peak MB");
         out << line;
     }
     for (const MethodStyle& m : kMethods)
@@ -512,20 +544,20 @@ std::string table(const BenchResult& r, bool markdown) {
             if (p.spec.method != m.method) continue;
             const std::string mem = p.peakMemoryBytes > 0 ? fmt("%.0f", p.peakMemoryBytes / 1048576.0) : "—";
             if (!p.ok) {
-                if (markdown) out << "| " << p.spec.method << " | " << p.spec.label << " | failed: " << p.error << " ||||||\n";
+                if (markdown) out << "| " << p.spec.method << " | " << p.spec.label << " | failed: " << p.error << " |||||||\n";
                 else out << p.spec.method << " " << p.spec.label << " FAILED: " << p.error << '\n';
                 continue;
             }
             if (markdown) {
                 out << "| " << p.spec.method << " | " << p.spec.label << " | " << secs(p.lightmapSeconds) << " | " << pct(p.lightmap)
                     << " | " << pct(p.lightmapIndirect) << " | " << secs(p.imageSeconds) << " | " << pct(p.image) << " | "
-                    << secs(p.cpuSeconds) << " | " << mem << " |\n";
+                    << pct(p.lightmapped) << " | " << secs(p.cpuSeconds) << " | " << mem << " |\n";
             } else {
                 char line[512];
-                std::snprintf(line, sizeof line, "%-13s %-32s %9s %8s %8s %9s %8s %8s %8s\n", p.spec.method.c_str(),
+                std::snprintf(line, sizeof line, "%-13s %-32s %9s %8s %8s %9s %8s %8s %8s %8s\n", p.spec.method.c_str(),
                               p.spec.label.c_str(), secs(p.lightmapSeconds).c_str(), pct(p.lightmap).c_str(),
                               pct(p.lightmapIndirect).c_str(), secs(p.imageSeconds).c_str(), pct(p.image).c_str(),
-                              secs(p.cpuSeconds).c_str(), mem.c_str());
+                              pct(p.lightmapped).c_str(), secs(p.cpuSeconds).c_str(), mem.c_str());
                 out << line;
             }
         }
@@ -611,7 +643,10 @@ void writeMarkdown(BenchResult& r, const BenchOptions& options, const std::strin
        << " runs in one process (a run over " << fmt("%.0f", options.repeatLimitSeconds) << " s is timed once). Reference: "
        << r.reference.description << ". Errors are relative RMSE (RMSE / mean, RGB pooled) over the lightmap's covered "
           "texels and the image's pixels (the emitter, reference > "
-       << fmt("%g", options.imageExcludeAbove) << ", excluded); bench.csv also has relMSE (ε = 10⁻²) and SMAPE.\n\n";
+       << fmt("%g", options.imageExcludeAbove) << ", excluded); bench.csv also has relMSE (ε = 10⁻²) and SMAPE. The "
+          "lightmap-lit image is the camera lit by the point's lightmap as scene.glb carries it (albedo × lightmap + "
+          "emission, what `voxlight view` shows), rated against the reference image over the same pixels and timed as "
+          "its lightmap.\n\n";
     if (!headlineText.empty()) md << headlineText << '\n';
     if (std::find(r.files.begin(), r.files.end(), "bench.png") != r.files.end())
         md << "![wall time against relative RMSE, log axes](bench.png)\n\n";
@@ -623,11 +658,12 @@ void writeMarkdown(BenchResult& r, const BenchOptions& options, const std::strin
     if (!maps.empty()) {
         md << "Error heat maps (|test − reference| / mean reference; black 0, yellow ≥ "
            << fmt("%.0f%%", 100.0 * kHeatScale) << "; grey: not compared):\n\n";
-        md << "| point | lightmap | image |\n|---|---|---|\n";
+        md << "| point | lightmap | image | lightmap-lit image |\n|---|---|---|---|\n";
         for (const HeatMap& h : maps)
-            md << "| " << h.method << " " << h.label << " (" << h.lightmapError << " / " << h.imageError << ") | "
-               << (h.lightmapPng.empty() ? "—" : "![](" + h.lightmapPng + ")") << " | "
-               << (h.imagePng.empty() ? "—" : "![](" + h.imagePng + ")") << " |\n";
+            md << "| " << h.method << " " << h.label << " (" << h.lightmapError << " / " << h.imageError << " / "
+               << h.lightmappedError << ") | " << (h.lightmapPng.empty() ? "—" : "![](" + h.lightmapPng + ")") << " | "
+               << (h.imagePng.empty() ? "—" : "![](" + h.imagePng + ")") << " | "
+               << (h.lightmappedPng.empty() ? "—" : "![](" + h.lightmappedPng + ")") << " |\n";
         md << '\n';
     }
     for (const std::string& note : r.notes) md << "- " << note << '\n';
@@ -647,6 +683,7 @@ const std::vector<std::string>& benchCsvColumns() {
         "lightmap_indirect_relrmse", "lightmap_indirect_relmse", "lightmap_indirect_smape",
         "image_relrmse", "image_relmse", "image_smape",
         "image_indirect_relrmse", "image_indirect_relmse", "image_indirect_smape",
+        "lightmapped_relrmse", "lightmapped_relmse", "lightmapped_smape",
         "lightmap_pareto", "image_pareto"};
     return columns;
 }

@@ -1,10 +1,11 @@
 // The bench's outputs: bench.csv (benchCsvColumns, one row a point; an error that was not
 // measured is an empty cell), bench.json (everything, with each point's runs), bench.png
-// (gnuplot: wall time against relative RMSE on log axes, lightmap and image, each method's
-// Pareto front drawn as a line), heatmaps/ (per-texel / per-pixel relative error, EXR and a
-// colour PNG, for the VCT default and each other method's point nearest its error) and
-// bench.md (a README-ready section embedding them, with the headline figures: the VCT
-// default's lightmap and image against each other method at equal error). With the stage
+// (gnuplot: wall time against relative RMSE on log axes, lightmap, image and lightmap-lit
+// image, each method's Pareto front drawn as a line), heatmaps/ (per-texel / per-pixel
+// relative error, EXR and a colour PNG, for the VCT default and each other method's point
+// nearest its error) and bench.md (a README-ready section embedding them, with the headline
+// figures: the VCT default's lightmap, image and lightmap-lit image against each other method
+// at equal error). With the stage
 // scaling (scaling.h), bench.json has "scaling" and bench.md "How the stages scale". They
 // name files as displayPath does (display_path.h): never by this machine's absolute paths.
 #pragma once

@@ -2,13 +2,15 @@
 // and the path tracer's spp (and Cycles' spp when Blender is on the PATH), times every
 // point in this one process (median of repeats), measures its peak memory and its error
 // against one reference (reference.h) on the lightmap's covered texels and on the
-// image, total and indirect, and writes bench.csv, bench.json, a time-against-error plot,
+// image, total and indirect, and of the image the lightmap lights (the view a user sees,
+// bake/lightmap_image.h) against the reference image, and writes bench.csv, bench.json, a time-against-error plot,
 // error heat maps and a Markdown report (report.h).
 //
 // Times: a VCT point runs the whole bake (load, voxelize, voxel light, bounces, mips, BVH,
 // receivers, shading, EXR writes; no grids file); its lightmap time is the bake without the
-// image stage and its image time the bake without the lightmap stage. A path-tracer point
-// times load + BVH + receivers + tracing the same way.
+// image stage and its image time the bake without the lightmap stage (neither counts the
+// lightmap-lit image's render). A path-tracer point times load + BVH + receivers + tracing
+// the same way; its lightmap-lit image is made from its shared atlas after the timing.
 //
 // With options.scaling it then times how each stage scales with voxel and lightmap
 // resolution and threads (scaling.h), reported with the rest.
@@ -50,6 +52,9 @@ struct BenchPointResult {
     double cpuSeconds = 0.0;                // median; the shared machine is oversubscribed, so wall ≥ CPU / threads
     double peakMemoryBytes = 0.0;           // the process's resident high-water mark during the point
     BenchError lightmap, lightmapIndirect, image, imageIndirect;
+    // The camera lit by the point's lightmap as it ships (bake/lightmap_image.h), against the
+    // reference image; its time is the lightmap's, what making the lightmap cost.
+    BenchError lightmapped;
     double voxelSize = 0.0;                 // vct: the bake's voxel size (m) and what set it
     std::string voxelSizeSetBy;
     std::string outputDir;                  // its outputs, relative to the bench folder

@@ -372,6 +372,12 @@ BakeReport mergeScene(const BakeJob& job, const std::string& sceneWork, const Sc
         }
         if (job.settings.outputs.lightmaps) report.stages.push_back({"lightmaps", lightmapSeconds});
         if (units.cameras > 0) report.stages.push_back({"images", imageSeconds});
+        // The lightmap-lit images need every atlas finished, so they are made here.
+        if (makesLightmapImages(job.settings) && units.cameras > 0) {
+            const auto start = std::chrono::steady_clock::now();
+            addLightmapImages(scene, ReceiverScene(scene), job.settings, result);
+            report.stages.push_back({"lightmap image", secondsSince(start)});
+        }
         for (const UnitRecord& record : records)
             report.peakMemoryBytes = std::max(report.peakMemoryBytes, record.peakMemoryBytes);
         writeBakeFiles(job, result, source, report, staging, diagnostics);

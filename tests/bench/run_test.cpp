@@ -119,12 +119,23 @@ TEST_CASE("A tiny bench run writes bench.csv with the declared columns and finit
             CHECK(std::isfinite(v));
             CHECK(v >= 0.0);
         }
+        // The lightmap-lit image, VCT and path tracer alike (each lights the camera by its lightmap).
+        for (const char* name : {"lightmapped_relrmse", "lightmapped_relmse", "lightmapped_smape"}) {
+            INFO(name);
+            REQUIRE_FALSE(f[column(name)].empty());
+            const double v = std::strtod(f[column(name)].c_str(), nullptr);
+            CHECK(std::isfinite(v));
+            CHECK(v >= 0.0);
+        }
+        CHECK(std::strtod(f[column("lightmapped_relrmse")].c_str(), nullptr) < 1.0);
         // SMAPE is bounded by 1 by definition; relative RMSE of these bakes is far below 100%.
         CHECK(std::strtod(f[column("lightmap_smape")].c_str(), nullptr) <= 1.0);
         CHECK(std::strtod(f[column("lightmap_relrmse")].c_str(), nullptr) < 1.0);
         CHECK(std::strtod(f[column("runs")].c_str(), nullptr) == 2.0);
     }
-    for (const char* file : {"bench.json", "bench.md", "plot/bench.gp", "heatmaps/vct-default_lightmap.png"}) {
+    for (const char* file : {"bench.json", "bench.md", "plot/bench.gp", "heatmaps/vct-default_lightmap.png",
+                             "heatmaps/vct-default_lightmapped.png", "points/vct-default/image_lightmapped.exr",
+                             "points/path-spp_4/image_lightmapped.exr"}) {
         INFO(file);
         CHECK(fs::exists(fs::path(out) / file));
     }
@@ -132,6 +143,8 @@ TEST_CASE("A tiny bench run writes bench.csv with the declared columns and finit
     CHECK(md.find("| vct | cones=6 |") != std::string::npos);
     // The headline compares the path tracer with the VCT default on both outputs.
     const nlohmann::json headline = nlohmann::json::parse(readText(fs::path(out) / "bench.json"))["headline"];
+    CHECK(headline["vct_default"]["lightmapped_relative_rmse"].get<double>() > 0.0);
+    CHECK(md.find("lightmap-lit image relative RMSE") != std::string::npos);
     for (const char* output : {"lightmap", "image"}) {
         INFO(output);
         CHECK(headline["vct_default"][std::string(output) + "_seconds"].get<double>() > 0.0);

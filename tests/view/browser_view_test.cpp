@@ -1,14 +1,19 @@
 // The viewer page in a real browser (headless Chromium, WebGL on SwiftShader) against the
-// bake's own images: what a user sees in `voxlight view` is what the bake computed.
+// bake's own images: what a user sees in `voxlight view` is what the bake computed, and what
+// the bake's lightmap-lit image (bake/lightmap_image.h) says it shows.
 #include "bake/bake_job.h"
+#include "bake/lightmap_image.h"
 #include "core/image_io.h"
 #include "metrics/metrics.h"
 #include "support/paths.h"
 #include "view/browser_capture.h"
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <fstream>
 
 using namespace vl;
 namespace fs = std::filesystem;
@@ -86,6 +91,52 @@ Image capturePage(const fs::path& out, BrowserCapture shot, const std::string& n
     shot.chromium = findChromium();
     captureInBrowser(server, shot);
     return linearPng(options.captureFile.string());
+}
+
+// An 8-bit PNG's RGB codes, 3 per pixel.
+std::vector<int> pngCodes(const std::string& path, int& width, int& height) {
+    int channels = 0;
+    const std::vector<uint8_t> bytes = readImage8(path, width, height, channels);
+    std::vector<int> codes(size_t(width) * size_t(height) * 3);
+    for (size_t p = 0; p < size_t(width) * size_t(height); ++p)
+        for (size_t c = 0; c < 3; ++c) codes[3 * p + c] = bytes[p * size_t(channels) + std::min<size_t>(c, size_t(channels) - 1)];
+    return codes;
+}
+
+// How far two 8-bit sRGB images are apart over the masked pixels, in codes (each pixel's
+// largest channel difference).
+struct CodeDifference {
+    double within = 0.0;  // share of the pixels at most kCodeTolerance apart
+    double mean = 0.0;    // mean over pixels and channels
+    int worst = 0;
+};
+
+// The page and the image are both the bake's light through the sRGB curve, quantised once:
+// at a pixel away from edges they differ by float arithmetic (the GPU's, SwiftShader's) and
+// by the rounding to 8 bits, a code at most. Two codes leave room for a driver's rounding.
+constexpr int kCodeTolerance = 2;
+
+CodeDifference codeDifference(const std::vector<int>& a, const std::vector<int>& b, const Image& mask) {
+    CodeDifference d;
+    size_t pixels = 0, within = 0;
+    double sum = 0.0;
+    for (int y = 0; y < mask.height; ++y)
+        for (int x = 0; x < mask.width; ++x) {
+            if (!(mask.at(x, y) > 0.5f)) continue;
+            const size_t p = size_t(y) * size_t(mask.width) + size_t(x);
+            int largest = 0;
+            for (size_t c = 0; c < 3; ++c) {
+                const int diff = std::abs(a[3 * p + c] - b[3 * p + c]);
+                largest = std::max(largest, diff);
+                sum += diff;
+            }
+            d.worst = std::max(d.worst, largest);
+            within += largest <= kCodeTolerance ? 1 : 0;
+            ++pixels;
+        }
+    d.within = pixels ? double(within) / double(pixels) : 0.0;
+    d.mean = pixels ? sum / (3.0 * double(pixels)) : 0.0;
+    return d;
 }
 
 #define VL_SKIP_WITHOUT_CHROMIUM()                                                                      \
@@ -177,4 +228,116 @@ TEST_CASE("The viewer page as a user sees it, controls and all, shows the same v
     const ErrorMetrics error = compareImages(page, canvas, options);
     INFO("page against canvas: relative RMSE " << error.relativeRmse);
     CHECK(error.relativeRmse < 0.03);
+}
+
+TEST_CASE("The viewer page in Chromium shows the bake's lightmap-lit image, code for code", "[view][browser]") {
+    // The default scene with two lightmaps (the walls in an atlas group of their own) and a
+    // block left without TEXCOORD_1 (no lightmap: the viewer's unlit level), baked at 128 × 128;
+    // the page's capture at exposure 0 against image_lightmapped.png, which the bake encodes as
+    // the page does (the sRGB curve, clamped, 8 bits). Pixels away from edges (the page reads
+    // one point at a pixel's centre, the bake its 2 × 2 rays) must be within kCodeTolerance
+    // codes, and their mean difference under a quarter of a code. The same comparison with the
+    // image a page would show that read the lightmap upside down, or did not read it, fails by far.
+    VL_SKIP_WITHOUT_CHROMIUM();
+    const fs::path out = test::tempDir("view-lightmapped");
+    fs::remove_all(out);
+    const fs::path input = out / "input";
+    fs::create_directories(input);
+    fs::copy_file(test::sourceDir() + "/scenes/cornell_box.bin", input / "cornell_box.bin");
+    nlohmann::json gltf = nlohmann::json::parse(std::ifstream(test::sourceDir() + "/scenes/cornell_box.gltf"));
+    bool stripped = false;
+    for (nlohmann::json& mesh : gltf["meshes"])
+        if (mesh["name"] == "TallBlock")
+            for (nlohmann::json& primitive : mesh["primitives"]) stripped = primitive["attributes"].erase("TEXCOORD_1") > 0;
+    REQUIRE(stripped);
+    std::ofstream(input / "cornell_box.gltf") << gltf.dump();
+
+    BakeJob job;
+    job.scenePath = (input / "cornell_box.gltf").string();
+    job.outputDir = (out / "box").string();
+    job.settings.quiet = true;
+    job.settings.outputs.grids = false;
+    job.settings.generateLightmapUvs = false;
+    job.settings.imageWidth = job.settings.imageHeight = 128;
+    AtlasGroup walls;
+    walls.name = "walls";
+    walls.meshes = {"RedWall", "GreenWall"};
+    walls.width = walls.height = 64;
+    job.settings.lightmap.atlases = {walls};
+    const BakeReport report = runBake(job);
+    INFO(report.error);
+    REQUIRE(report.ok);
+    const fs::path baked = out / "box";
+    REQUIRE(fs::exists(baked / "walls.exr"));
+
+    BrowserCapture shot;
+    shot.scene = "box";
+    shot.width = shot.height = 128;
+    capturePage(out, shot, "canvas_lit.png");
+    int width = 0, height = 0;
+    const std::vector<int> page = pngCodes((out / "canvas_lit.png").string(), width, height);
+    REQUIRE(width == 128);
+    REQUIRE(height == 128);
+    const std::vector<int> expected = pngCodes((baked / "image_lightmapped.png").string(), width, height);
+    const Image lit = readImage((baked / "image_lightmapped.exr").string());
+    const Image mask = awayFromEdges(readImage((baked / "image_albedo.exr").string()), lit, 0.15f);
+    INFO("pixels compared: " << coveredFraction(mask));
+    CHECK(coveredFraction(mask) > 0.5);
+    const CodeDifference difference = codeDifference(page, expected, mask);
+    INFO("page against image_lightmapped.png: " << 100.0 * difference.within << "% of pixels within "
+                                                << kCodeTolerance << " codes, mean " << difference.mean << ", worst "
+                                                << difference.worst);
+    CHECK(difference.worst <= kCodeTolerance);
+    CHECK(difference.mean < 0.25);
+
+    // The unlit block is in the comparison: the page and the image agree on the unlit level.
+    // (Its pixels are the ones whose albedo is white and whose light is kUnlitLight.)
+    const Image albedo = readImage((baked / "image_albedo.exr").string());
+    size_t unlitPixels = 0;
+    for (int y = 0; y < lit.height; ++y)
+        for (int x = 0; x < lit.width; ++x)
+            if (mask.at(x, y) > 0.5f && albedo.at(x, y, 0) > 0.7f &&
+                std::abs(lit.at(x, y, 0) - albedo.at(x, y, 0) * kUnlitLight) < 1e-4f)
+                ++unlitPixels;
+    INFO("unlit pixels compared: " << unlitPixels);
+    CHECK(unlitPixels > 100);
+
+    // What a page that read the lightmap upside down, or not at all, would show: the bake's
+    // lightmap-lit image made again from the same rays with the lightmaps flipped in v, or with
+    // none. The scene is the one the bake lit (turned, anchored, its atlases), from its voxel stages.
+    Diagnostics diagnostics(false, false);
+    Scene scene = loadJobScene(job);
+    VoxelStages stages = bakeVoxelStages(scene, job.settings, diagnostics);
+    std::vector<ShippedLightmap> shipped, flipped;
+    for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics)) {
+        const Image texels = shippedLightmapTexels(readImage((baked / (atlas.name + ".exr")).string()));
+        Image upsideDown = texels;
+        for (int y = 0; y < texels.height; ++y)
+            for (int x = 0; x < texels.width; ++x) upsideDown.setRgb(x, texels.height - 1 - y, texels.rgb(x, y));
+        shipped.push_back({atlas.meshes, texels});
+        flipped.push_back({atlas.meshes, upsideDown});
+    }
+    REQUIRE(shipped.size() == 2);
+    const std::vector<Camera> cameras = bakeCameras(scene, job.settings);
+    REQUIRE(cameras.size() == 1);
+    const CameraReceivers receivers =
+        bakeCameraReceivers(stages.tracing->traceScene, stages.tracing->bvh,
+                            makeCameraModel(cameras[0], job.settings.imageWidth, job.settings.imageHeight), job.settings);
+    const auto render = [&](const std::vector<ShippedLightmap>& lightmaps) {
+        return renderLightmapImage(receivers, scene, stages.tracing->triangles, lightmaps);
+    };
+    // The same scene and rays as the bake's: its own image again.
+    const Image again = render(shipped);
+    REQUIRE(again.pixels.size() == lit.pixels.size());
+    for (size_t k = 0; k < lit.pixels.size(); ++k) REQUIRE(again.pixels[k] == Approx(lit.pixels[k]).margin(1e-6));
+    for (const auto& [name, lightmaps] : {std::pair<std::string, std::vector<ShippedLightmap>>{"v flipped", flipped},
+                                          {"no lightmap", {}}}) {
+        const std::string png = (out / ("wrong_" + std::to_string(name.size()) + ".png")).string();
+        writePngSrgb(render(lightmaps), png);
+        const CodeDifference wrong = codeDifference(page, pngCodes(png, width, height), mask);
+        INFO(name << ": " << 100.0 * wrong.within << "% of pixels within " << kCodeTolerance << " codes, mean "
+                  << wrong.mean << ", worst " << wrong.worst);
+        CHECK(wrong.within < 0.5);
+        CHECK(wrong.mean > 5.0);
+    }
 }

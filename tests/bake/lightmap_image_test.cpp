@@ -1,0 +1,209 @@
+// The lightmap-lit image (bake/lightmap_image.h): each pixel is albedo × the lightmap read
+// bilinearly at TEXCOORD_1 (v down the image, as the viewer reads it), plus emission; a
+// surface outside every lightmap shows albedo × the viewer's unlit level; the bake writes it
+// beside its own image from the same rays, and it agrees with that image where the lightmap
+// resolves the light.
+#include "bake/bake_job.h"
+#include "bake/lightmap_image.h"
+#include "bake/receivers.h"
+
+#include "core/image_io.h"
+#include "export/lightmap_encoding.h"
+#include "metrics/metrics.h"
+#include "support/paths.h"
+#include "trace/bvh.h"
+#include "trace/camera.h"
+#include "trace/trace_scene.h"
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+using namespace vl;
+namespace fs = std::filesystem;
+
+namespace {
+
+// The square [x0, x1] × [z0, z1] at height 0 facing +Y (toward a camera above it);
+// TEXCOORD_1 u = (x − x0)/(x1 − x0), v = (z − z0)/(z1 − z0), unless `withUv1` is false.
+Mesh groundQuad(const std::string& name, float x0, float x1, float z0, float z1, int material, bool withUv1 = true) {
+    Mesh mesh;
+    mesh.name = name;
+    mesh.material = material;
+    mesh.positions = {{x0, 0, z0}, {x1, 0, z0}, {x1, 0, z1}, {x0, 0, z1}};
+    mesh.normals.assign(4, vec3(0, 1, 0));
+    if (withUv1) mesh.uv1 = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    mesh.indices = {0, 2, 1, 0, 3, 2};
+    return mesh;
+}
+
+int addMaterial(Scene& scene, vec3 albedo, vec3 emission = vec3(0.0f)) {
+    Material m;
+    m.baseColorFactor = vec4(albedo, 1.0f);
+    m.emissiveFactor = emission;
+    m.metallic = 0.0f;
+    m.doubleSided = true;
+    scene.materials.push_back(m);
+    return int(scene.materials.size()) - 1;
+}
+
+// A lightmap whose every texel differs from the others, and from its mirror image in v.
+Image patternLightmap(int width, int height) {
+    Image texels(width, height, 3);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) texels.setRgb(x, y, vec3(1.0f + x, 0.5f + 2.0f * y, 0.25f * (1 + x) * (1 + y)));
+    return texels;
+}
+
+// Bilinear between texel centres (i + ½)/size, clamped to the edge, row 0 at v = 0: what the
+// viewer's lightmapAt computes, written out again here in double.
+glm::dvec3 expectedLight(const Image& texels, double u, double v) {
+    const double px = u * texels.width - 0.5, py = v * texels.height - 0.5;
+    const double x0 = std::floor(px), y0 = std::floor(py);
+    const auto at = [&](double x, double y) {
+        const int xi = std::clamp(int(x), 0, texels.width - 1), yi = std::clamp(int(y), 0, texels.height - 1);
+        return glm::dvec3(texels.rgb(xi, yi));
+    };
+    const double fx = px - x0, fy = py - y0;
+    return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) + fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
+}
+
+}  // namespace
+
+TEST_CASE("The lightmap is read bilinearly between texel centres with v down the image, clamped at its edges",
+          "[bake]") {
+    const Image texels = patternLightmap(8, 4);
+    // A texel's centre gives the texel; v near 0 is the image's top row, not its bottom.
+    CHECK(sampleLightmap(texels, vec2(2.5f / 8, 1.5f / 4)) == texels.rgb(2, 1));
+    CHECK(sampleLightmap(texels, vec2(0.5f / 8, 0.5f / 4)) == texels.rgb(0, 0));
+    CHECK(sampleLightmap(texels, vec2(0.5f / 8, 3.5f / 4)) == texels.rgb(0, 3));
+    // Half way between two centres: their mean.
+    const vec3 between = sampleLightmap(texels, vec2(3.0f / 8, 1.5f / 4));
+    for (int c = 0; c < 3; ++c) CHECK(between[c] == Approx(0.5f * (texels.rgb(2, 1)[c] + texels.rgb(3, 1)[c])).epsilon(1e-6));
+    // Outside the image the edge texels hold, as the viewer's clamped texelFetch.
+    CHECK(sampleLightmap(texels, vec2(-3.0f, 0.5f / 4)) == texels.rgb(0, 0));
+    CHECK(sampleLightmap(texels, vec2(5.0f, 7.0f)) == texels.rgb(7, 3));
+    CHECK(sampleLightmap(texels, vec2(NAN, 0.5f)) == vec3(0.0f));
+}
+
+TEST_CASE("A lightmap-lit pixel is albedo × the bilinear lightmap at its TEXCOORD_1, and a surface outside every "
+          "lightmap is albedo × the viewer's unlit level plus its emission",
+          "[bake]") {
+    Scene scene;
+    scene.sourcePath = "lightmap-image.gltf";
+    const vec3 floorAlbedo(0.25f, 0.5f, 0.75f), lampAlbedo(0.5f, 0.4f, 0.3f), lampEmission(2.0f, 3.0f, 4.0f);
+    const vec3 plainAlbedo(0.8f, 0.4f, 0.2f);
+    scene.meshes.push_back(groundQuad("floor", -2.0f, 0.0f, -1.0f, 1.0f, addMaterial(scene, floorAlbedo)));
+    scene.meshes.push_back(groundQuad("lamp", 0.2f, 1.0f, -1.0f, 0.0f, addMaterial(scene, lampAlbedo, lampEmission)));
+    // Listed in the lightmap below but without TEXCOORD_1: the viewer has nothing to read it by.
+    scene.meshes.push_back(groundQuad("plain", 0.2f, 1.0f, 0.1f, 1.0f, addMaterial(scene, plainAlbedo), false));
+
+    const SceneTriangles triangles = gatherTriangles(scene);
+    const Bvh bvh = Bvh::build(triangles);
+    const TraceScene trace = TraceScene::build(scene, triangles);
+    Camera camera;
+    camera.position = vec3(-0.5f, 4.0f, 0.0f);
+    camera.forward = vec3(0.0f, -1.0f, 0.0f);
+    camera.up = vec3(0.0f, 0.0f, -1.0f);
+    camera.yfov = 1.0f;
+    const CameraReceivers receivers = buildCameraReceivers(trace, bvh, makeCameraModel(camera, 48, 40));
+
+    const Image texels = patternLightmap(8, 4);
+    const Image image = renderLightmapImage(receivers, scene, triangles, {{{0, 2}, texels}});
+    REQUIRE(image.width == 48);
+    REQUIRE(image.height == 40);
+
+    int counted[3] = {0, 0, 0};
+    for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x) {
+            const size_t element = size_t(y) * size_t(image.width) + size_t(x);
+            INFO("pixel " << x << ", " << y);
+            if (!receivers.receivers.covered(element)) {
+                CHECK(image.rgb(x, y) == vec3(0.0f));  // no sky: the background is black
+                continue;
+            }
+            REQUIRE(receivers.receivers.sampleCount(element) == 1);  // one ray per pixel
+            const SurfaceSample& s = receivers.receivers.samples[receivers.receivers.begin[element]];
+            REQUIRE(s.weight == 1.0f);
+            const uint32_t mesh = triangles.meshIndex[s.triangle];
+            glm::dvec3 expected;
+            if (mesh == 0) {
+                const double u = (s.position.x + 2.0) / 2.0, v = (s.position.z + 1.0) / 2.0;
+                expected = glm::dvec3(floorAlbedo) * expectedLight(texels, u, v);
+            } else if (mesh == 1) {
+                expected = glm::dvec3(lampAlbedo) * double(kUnlitLight) + glm::dvec3(lampEmission);
+            } else {
+                expected = glm::dvec3(plainAlbedo) * double(kUnlitLight);
+            }
+            ++counted[mesh];
+            for (int c = 0; c < 3; ++c) CHECK(std::abs(image.rgb(x, y)[c] - expected[c]) <= 1e-5 * std::max(1.0, expected[c]));
+        }
+    INFO("pixels on the floor, the lamp, the plain quad: " << counted[0] << ", " << counted[1] << ", " << counted[2]);
+    CHECK(counted[0] > 300);
+    CHECK(counted[1] > 50);
+    CHECK(counted[2] > 50);
+    CHECK(kUnlitLight == 0.1f);  // tools/viewer/viewer.js UNLIT_LEVEL
+}
+
+TEST_CASE("The lightmap-lit image reads the texels scene.glb carries, as the viewer decodes them", "[bake]") {
+    Image total(5, 3, 3);
+    for (size_t k = 0; k < total.pixels.size(); ++k) total.pixels[k] = 0.003f * float(k * k) + 0.01f;
+    const RgbmImage encoded = encodeRgbm(total);
+    const Image shipped = shippedLightmapTexels(total);
+    for (int y = 0; y < total.height; ++y)
+        for (int x = 0; x < total.width; ++x)
+            for (int c = 0; c < 3; ++c) {
+                // The viewer: texel.rgb · texel.a · intensity, each byte / 255.
+                const uint8_t* t = &encoded.rgba[(size_t(y) * size_t(total.width) + size_t(x)) * 4];
+                const double viewer = (t[c] / 255.0) * (t[3] / 255.0) * encoded.range;
+                CHECK(shipped.at(x, y, c) == Approx(viewer).epsilon(1e-6));
+                CHECK(shipped.at(x, y, c) == Approx(total.at(x, y, c)).epsilon(0.02).margin(encoded.range / 255.0 / 255.0));
+            }
+}
+
+TEST_CASE("A bake writes each camera's lightmap-lit image beside its own, from the same rays", "[bake]") {
+    // The Cornell box with a 128² lightmap and a 96² image: the two images differ by where the
+    // light comes from (a texel's, read bilinearly, against each pixel's own gather) and by
+    // RGBM's steps. 2.3% here; the 4% bound leaves room for changes to the gather.
+    const fs::path out = fs::path(test::tempDir("lightmap-image")) / "cornell";
+    fs::remove_all(out);
+    BakeJob job;
+    job.scenePath = test::sourceDir() + "/scenes/cornell_box.gltf";
+    job.outputDir = out.string();
+    job.settings.quiet = true;
+    job.settings.outputs.grids = false;
+    job.settings.outputs.gltf = false;
+    job.settings.lightmap.width = job.settings.lightmap.height = 128;
+    job.settings.imageWidth = job.settings.imageHeight = 96;
+    const BakeReport report = runBake(job);
+    INFO(report.error);
+    REQUIRE(report.ok);
+    for (const char* file : {"image_lightmapped.exr", "image_lightmapped.png"}) {
+        INFO(file);
+        CHECK(std::find(report.files.begin(), report.files.end(), file) != report.files.end());
+    }
+    const Image lit = readImage((out / "image_lightmapped.exr").string());
+    const Image image = readImage((out / "image.exr").string());
+    REQUIRE(lit.width == 96);
+    REQUIRE(lit.height == 96);
+    // The emitter seen directly is the same emission in both; leave it out, as the bench does.
+    Image mask(image.width, image.height, 1, 1.0f);
+    for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x)
+            if (maxComponent(image.rgb(x, y)) > 5.0f) mask.at(x, y) = 0.0f;
+    MetricOptions options;
+    options.mask = &mask;
+    const ErrorMetrics error = compareImages(lit, image, options);
+    INFO("lightmap-lit against the bake's image: relative RMSE " << error.relativeRmse);
+    CHECK(error.relativeRmse < 0.04);
+
+    // Without the setting, no such file.
+    fs::remove_all(out);
+    job.settings.outputs.lightmapImage = false;
+    const BakeReport without = runBake(job);
+    REQUIRE(without.ok);
+    CHECK_FALSE(fs::exists(out / "image_lightmapped.exr"));
+    CHECK(std::find(without.files.begin(), without.files.end(), "image_lightmapped.png") == without.files.end());
+}
