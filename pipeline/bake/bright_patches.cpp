@@ -50,7 +50,7 @@ BrightPatchSplit splitBrightPatches(const VoxelScene& voxels, const VoxelSurface
     // closest to, with all its faces and points.
     struct Gathered {
         std::vector<std::pair<uint32_t, uint8_t>> faces;  // (voxel, face)
-        std::vector<BrightPoint> points;
+        std::vector<std::pair<uint64_t, BrightPoint>> points;  // by SurfacePoint::id
         double power = 0.0;
     };
     const int cell = std::max(1, settings.cellVoxels);
@@ -75,21 +75,27 @@ BrightPatchSplit splitBrightPatches(const VoxelScene& voxels, const VoxelSurface
             const vec3 L = voxels.faceRadiance[i][size_t(face)];
             for (uint32_t k = first; k < last; ++k) {
                 const SurfacePoint& p = points.points[k];
-                g.points.push_back({p.position, p.geometricNormal, p.normal, L, p.area});
+                g.points.emplace_back(p.id, BrightPoint{p.position, p.geometricNormal, p.normal, L, p.area});
                 g.power += meanOf(L) * double(p.area);
             }
         }
     }
 
-    // The most powerful first (ties keep the cell order); the first maxPatches of them, back in
-    // cell order.
-    std::vector<const Gathered*> ranked;
-    for (const auto& entry : cells) ranked.push_back(&entry.second);
+    // The most powerful first (ties keep the cell order); the first maxPatches of them, in the
+    // order of their points' ids, as their points are: an order the scene's placement does not
+    // change (a quarter turn reorders the cells), so neither do the draws.
+    std::vector<Gathered*> ranked;
+    for (auto& entry : cells) {
+        std::sort(entry.second.points.begin(), entry.second.points.end(),
+                  [](const auto& a, const auto& b) { return a.first < b.first; });
+        ranked.push_back(&entry.second);
+    }
     std::vector<size_t> order(ranked.size());
     for (size_t k = 0; k < order.size(); ++k) order[k] = k;
     std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return ranked[a]->power > ranked[b]->power; });
     order.resize(std::min(order.size(), size_t(std::max(0, settings.maxPatches))));
-    std::sort(order.begin(), order.end());
+    std::sort(order.begin(), order.end(),
+              [&](size_t a, size_t b) { return ranked[a]->points.front().first < ranked[b]->points.front().first; });
 
     for (size_t k : order) {
         const Gathered& g = *ranked[k];
@@ -98,7 +104,7 @@ BrightPatchSplit splitBrightPatches(const VoxelScene& voxels, const VoxelSurface
         patch.pointCount = uint32_t(g.points.size());
         glm::dvec3 centre(0.0), normal(0.0);
         double a = 0.0, cumulative = 0.0;
-        for (const BrightPoint& p : g.points) {
+        for (const auto& [id, p] : g.points) {
             centre += double(p.area) * glm::dvec3(p.position);
             normal += double(p.area) * glm::dvec3(p.geometricNormal);
             a += p.area;
@@ -108,7 +114,7 @@ BrightPatchSplit splitBrightPatches(const VoxelScene& voxels, const VoxelSurface
         patch.normal = length > 1e-6 * a ? vec3(normal / length) : vec3(0.0f);
         patch.area = float(a);
         patch.radiance = vec3(float(g.power / a));
-        for (const BrightPoint& p : g.points) {
+        for (const auto& [id, p] : g.points) {
             patch.radius = std::max(patch.radius, glm::length(p.position - patch.position));
             cumulative += meanOf(p.radiance) * double(p.area);
             split.points.push_back(p);

@@ -200,8 +200,12 @@ Image gatherAtlasIndirect(const LightmapAtlas& atlas, int rowBegin, int rowEnd, 
     std::vector<FanStart> fans(records.size());
     tbb::parallel_for(size_t(0), records.size(), [&](size_t k) {
         const Record& r = records[k];
-        vec3 tangent, bitangent;
-        orthonormalBasis(r.sample.normal, tangent, bitangent);
+        // Laid out from the sample's triangle's first edge, which turns with the scene.
+        const vec3* corner = scene.vertices + 3 * size_t(r.sample.triangle);
+        const vec3 edge = corner[1] - corner[0];
+        vec3 tangent = edge - glm::dot(edge, r.sample.normal) * r.sample.normal, bitangent;
+        if (glm::length(tangent) > 1e-12f) tangent = glm::normalize(tangent);
+        else orthonormalBasis(r.sample.normal, tangent, bitangent);
         const double turn = double(r.texel % size_t(W)) * 0.7548776662466927 + double(r.texel / size_t(W)) * 0.5698402909980532;
         fans[k].origin = offsetRayOrigin(r.sample.position, r.ng, bvh.extent);
         fans[k].frame = fanFrame(r.sample.normal, tangent, float(turn - std::floor(turn)));

@@ -241,15 +241,25 @@ VL_HOSTDEV inline vec3 skyImageDrawsIrradiance(const TraceSceneView& s, const Bv
 // (sky.h), and both sets count by the balance heuristic (skyShare). A small bright sun in
 // the image is found by its own draws, which cosine directions alone would miss or hit by
 // chance.
+// `tangent`, when given (unit, ⊥ ns), lays the directions out about ns from it (a frame that
+// turns with the scene); else orthonormalBasis's.
 VL_HOSTDEV inline vec3 skyIrradiance(const TraceSceneView& s, const BvhView& bvh, const vec3& p, const vec3& ng,
-                                     const vec3& ns, int strata, uint64_t seed) {
+                                     const vec3& ns, int strata, uint64_t seed, const vec3* tangent = nullptr) {
     if (!s.sky.present()) return vec3(0.0f);
     const float n = static_cast<float>(strata * strata);
     int seen = 0;
     vec3 sum(0.0f);
+    vec3 t, b;
+    if (tangent) {
+        t = *tangent;
+        b = glm::cross(ns, t);
+    } else {
+        orthonormalBasis(ns, t, b);
+    }
     for (int i = 0; i < strata; ++i)
         for (int j = 0; j < strata; ++j) {
-            const vec3 d = sampleDiffuseDirection(ns, jitteredStratum(seed, 0, strata, i, j, 0x534B59u));  // "SKY"
+            const vec3 local = sampleCosineHemisphere(jitteredStratum(seed, 0, strata, i, j, 0x534B59u));  // "SKY"
+            const vec3 d = local.x * t + local.y * b + local.z * ns;
             if (!skyOpenAlong(bvh, p, ng, d)) continue;
             ++seen;
             if (s.sky.hasImage()) sum += skyShare(skySeenAlong(s.sky, d), glm::dot(ns, d), n, s.sky.samplable() ? n : 0.0f);

@@ -32,9 +32,14 @@ SurfaceLightStats lightVoxelsByRays(VoxelScene& voxels, const VoxelSurfacePoints
             uint32_t rays = 0, blocked = 0;
             for (int s = 0; s < sides.count; ++s) {
                 const uint32_t first = points.begin[v * 6 + size_t(s)], last = points.begin[v * 6 + size_t(s) + 1];
-                // Each side's points take the R2 sequence from an offset of the side's own, so
-                // its few points spread over a sun's disk or an emitter instead of repeating.
-                Pcg32 rng = Pcg32::forItem(v, uint64_t(s), 0x4C49474854ull);  // "LIGHT"
+                // Each side's points take the R2 sequence from an offset of the side's own (seeded
+                // by its first point, which the scene's placement does not change), so its few
+                // points spread over a sun's disk or an emitter instead of repeating.
+                if (first == last) {
+                    empty[v] = 1;
+                    continue;
+                }
+                Pcg32 rng = Pcg32::forItem(points.points[first].id, 0, 0x4C49474854ull);  // "LIGHT"
                 const double o1 = rng.next1D(), o2 = rng.next1D();
                 vec3 sum(0.0f);
                 float weight = 0.0f;
@@ -44,17 +49,15 @@ SurfaceLightStats lightVoxelsByRays(VoxelScene& voxels, const VoxelSurfacePoints
                     u1 -= std::floor(u1);
                     u2 -= std::floor(u2);
                     vec3 E = surfacePointIrradiance(scene, bvh, p.position, p.geometricNormal, p.normal,
-                                                    vec2(float(u1), float(u2)), layer, uint64_t(k), &rays, &blocked);
+                                                    vec2(float(u1), float(u2)), layer, p.id, &rays, &blocked);
                     if (skyStrata > 0)
-                        E += skyIrradiance(scene, bvh, p.position, p.geometricNormal, p.normal, skyStrata, uint64_t(k));
+                        E += skyIrradiance(scene, bvh, p.position, p.geometricNormal, p.normal, skyStrata, p.id, &p.tangent);
                     sum += p.area * E;
                     weight += p.area;
                 }
                 if (weight > 0.0f) {
                     irradiance[s] = sum / weight;
                     area[s] = weight;
-                } else {
-                    empty[v] = 1;
                 }
             }
             // Sides without points: the irradiance of the voxel's sides that face their way.

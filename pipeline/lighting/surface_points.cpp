@@ -71,6 +71,8 @@ VoxelSurfacePoints voxelSurfacePoints(const VoxelScene& voxels, const TraceScene
                 const size_t v = size_t(found - voxels.coords.begin());
                 const VoxelSides sides = voxelSides(voxels.normal[v], voxels.axisWeights[v].data());
                 const vec3 front = glm::dot(hit.shadingNormal, hit.geometricNormal) >= 0.0f ? hit.shadingNormal : -hit.shadingNormal;
+                const vec3* corner = scene.vertices + 3 * size_t(t);
+                const vec3 edge = corner[1] - corner[0];
                 for (int sign = 1; sign >= (doubleSided ? -1 : 1); sign -= 2) {
                     const vec3 ng = float(sign) * hit.geometricNormal;
                     int best = -1;
@@ -89,6 +91,12 @@ VoxelSurfacePoints voxelSurfacePoints(const VoxelScene& voxels, const TraceScene
                     p.point.geometricNormal = ng;
                     p.point.triangle = t;
                     p.point.area = float(double(area) / double(n));
+                    const vec3 across = edge - glm::dot(edge, p.point.normal) * p.point.normal;
+                    const float length = glm::length(across);
+                    vec3 bitangent;
+                    if (length > 1e-12f) p.point.tangent = across / length;
+                    else orthonormalBasis(p.point.normal, p.point.tangent, bitangent);
+                    p.point.id = uint64_t(t) << 25 | uint64_t(std::min<uint32_t>(i, 0xFFFFFFu)) << 1 | uint64_t(sign < 0);
                     local.push_back(p);
                 }
             }

@@ -21,8 +21,14 @@ struct SurfacePoint {
     vec3 position{0.0f};  // on its triangle, the voxels' local frame
     vec3 normal{0.0f};    // unit shading normal on the side's side of the triangle
     vec3 geometricNormal{0.0f};  // unit, on the same side
+    // Unit, across the normal, along its triangle's first edge: a frame that turns with the
+    // scene, so what is sampled about the point does not change with the scene's placement.
+    vec3 tangent{0.0f};
     uint32_t triangle = ~0u;     // global triangle id (TraceSceneView)
     float area = 0.0f;           // m² it stands for
+    // Its triangle, its place among the triangle's points and its side: a seed and an order
+    // that the scene's placement does not change.
+    uint64_t id = 0;
 };
 
 struct VoxelSurfacePoints {

@@ -96,7 +96,7 @@ int main(int argc, char** argv) {
         Diagnostics diagnostics(false, false);
         Scene scene = loadJobScene(job);
         VoxelStages stages = bakeVoxelStages(scene, job.settings, diagnostics);
-        const ReceiverShading shading(*stages.tracing, stages.result.mips, stages.cache, job.settings, stages.onGpu);
+        const ReceiverShading shading(*stages.tracing, stages.result.mips, stages.cache, stages.bright, job.settings, stages.onGpu);
         std::vector<ShippedLightmap> shipped, floats;
         for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics)) {
             const ReceiverLighting lit = shading.shadeAtlasRows(atlas, 0, atlas.receivers.height);
