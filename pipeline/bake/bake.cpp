@@ -418,26 +418,24 @@ ReceiverLighting ReceiverShading::shadeAtlasRows(const LightmapAtlas& atlas, int
                 if (element < first || element >= last) image->pixels[k] = 0.0f;
             }
     } else if (texelGather()) {
-        // The direct light per sample, the indirect from the atlas's own records. The records
-        // of the rows around the band read the direct light there too (whether a record may be
-        // buried), so it is shaded a lattice spacing past the band and cleared after.
+        // Lights and emitters per sample; the sky and the indirect light from the atlas's own
+        // records (bake/texel_gather.h).
+        DirectLightSettings direct = settings_.direct;
+        direct.skyAtSamples = false;
+        lit = shadeReceivers(receivers, tracing_.traceScene.view(), tracing_.bvh.view(), nullptr, nullptr,
+                             settings_.cone, direct, true, &progress, first, last);
+        progress.finish();
         TexelGatherSettings texels;
         texels.spacing = settings_.texelGatherSpacing;
         texels.raysPerAxis = settings_.gatherRays;
         texels.brightSamples = settings_.brightPatches.samples;
-        const int spacing = texelGatherSpacing(atlas, mipView_.voxelSize, texels);
-        texels.spacing = spacing;
-        const size_t width = static_cast<size_t>(receivers.width);
-        const size_t around = std::min(first, spacing * width), after = std::min(receivers.elementCount() - last, spacing * width);
-        lit = shadeReceivers(receivers, tracing_.traceScene.view(), tracing_.bvh.view(), nullptr, nullptr,
-                             settings_.cone, settings_.direct, true, &progress, first - around, last + after);
-        progress.finish();
-        lit.indirect = gatherAtlasIndirect(atlas, rowBegin, rowEnd, &lit.direct, mipView_, bright_.restFaces, bright_,
-                                           tracing_.bvh.view(), tracing_.traceScene.view(), texels);
-        for (Image* image : {&lit.direct, &lit.directRadiance})
-            for (size_t k = 0; k < image->pixels.size(); ++k)
-                if (k / 3 < first || k / 3 >= last) image->pixels[k] = 0.0f;
-        return lit;  // a lightmap's indirectRadiance is not read: it stays 0
+        texels.skyDrawsPerAxis = settings_.direct.skyStrata;
+        texels.direct = direct;
+        const TexelGather gathered = gatherAtlasTexels(atlas, rowBegin, rowEnd, &lit.direct, mipView_, bright_.restFaces,
+                                                       bright_, tracing_.bvh.view(), tracing_.traceScene.view(), texels);
+        for (size_t k = 0; k < lit.direct.pixels.size(); ++k) lit.direct.pixels[k] += gathered.sky.pixels[k];
+        lit.indirect = gathered.indirect;
+        return lit;  // a lightmap's reflected light (directRadiance, indirectRadiance) is not read
     } else {
         lit = shadeReceivers(receivers, tracing_.traceScene.view(), tracing_.bvh.view(), &mipView_, gathered_,
                              settings_.cone, settings_.direct, true, &progress, first, last);

@@ -131,7 +131,8 @@ BrightPatchSplit splitBrightPatches(const VoxelScene& voxels, const VoxelSurface
 }
 
 vec3 brightPatchIrradiance(const BrightPatchSplit& split, const BvhView& bvh, const vec3& origin, const vec3& n,
-                           int samples, uint64_t seed) {
+                           int samples, uint64_t seed, float* variance) {
+    if (variance) *variance = 0.0f;
     const size_t count = split.patches.size();
     if (count == 0 || samples <= 0) return vec3(0.0f);
     // The proposal: what each patch could send, as a disk of its area at its centre, its
@@ -161,6 +162,7 @@ vec3 brightPatchIrradiance(const BrightPatchSplit& split, const BvhView& bvh, co
     Pcg32 rng = Pcg32::forItem(seed, 0, 0x425249474854ull);  // "BRIGHT"
     const float jitter = rng.next1D();
     vec3 sum(0.0f);
+    double squares = 0.0;
     for (int s = 0; s < samples; ++s) {
         // Stratified over the patches' table; the leftover places the draw within the patch.
         const float u = (float(s) + jitter) / float(samples) * total;
@@ -184,7 +186,14 @@ vec3 brightPatchIrradiance(const BrightPatchSplit& split, const BvhView& bvh, co
         const float cosR = glm::dot(n, w), cosE = -glm::dot(y.normal, w);
         if (!(cosR > 0.0f) || !(cosE > 0.0f) || !(-glm::dot(y.geometricNormal, w) > 0.0f)) continue;
         if (occluded(bvh, origin, n, y.position, y.geometricNormal)) continue;
-        sum += y.radiance * (cosR * cosE * y.area / (d2 + y.area / kPi) / (patchProbability * pointProbability));
+        const vec3 c = y.radiance * (cosR * cosE * y.area / (d2 + y.area / kPi) / (patchProbability * pointProbability));
+        sum += c;
+        const double l = (double(c.x) + double(c.y) + double(c.z)) / 3.0;
+        squares += l * l;
+    }
+    if (variance) {
+        const double mean = (double(sum.x) + double(sum.y) + double(sum.z)) / 3.0 / double(samples);
+        *variance = float(std::max(0.0, squares / double(samples) - mean * mean) / double(samples));
     }
     return sum / float(samples);
 }

@@ -71,8 +71,10 @@ BrightPatchSplit splitBrightPatches(const VoxelScene& voxels, const VoxelSurface
 // small disk of its area a facing its normal, L·cos·cos·a / (d² + a/π) (bounded where d → 0),
 // behind a shadow ray from origin to y. `seed` stratifies the draws. Unbiased over the disks
 // but for that bound.
+// `variance`, when given, receives the estimate's variance (mean channel) from the spread of
+// its samples.
 vec3 brightPatchIrradiance(const BrightPatchSplit& split, const BvhView& bvh, const vec3& origin, const vec3& n,
-                                      int samples, uint64_t seed);
+                           int samples, uint64_t seed, float* variance = nullptr);
 
 // Adds brightPatchIrradiance at every gather point to irradiance[k], seen from origins[k]
 // (where its gather starts: the surface its rays leave, or the cones' apex). TBB-parallel over

@@ -179,24 +179,67 @@ HitLookup hitLookup(const MipLevelView& level0, size_t voxels) {
 
 std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& mips,
                              const std::vector<FaceRadiance>& faces, const BvhView& bvh, const TraceSceneView& scene,
-                             int raysPerAxis, Progress* progress) {
+                             int raysPerAxis, Progress* progress, FanExtras* extras, int skyDrawsPerAxis) {
     checkRays(raysPerAxis);
     std::vector<vec3> irradiance(fans.size(), vec3(0.0f));
+    if (extras) {
+        extras->sky.assign(fans.size(), vec3(0.0f));
+        extras->variance.assign(fans.size(), 0.0f);
+        extras->escaped.assign(fans.size(), 0u);
+    }
     if (mips.levelCount <= 0) return irradiance;
     const std::vector<vec3> pattern = fanPattern(raysPerAxis);
     const float rays = float(pattern.size());
     const HitLookup level0 = hitLookup(mips.levels[0], faces.size());
+    const bool sky = extras && scene.sky.present();
+    const float imageDraws = scene.sky.samplable() ? float(skyDrawsPerAxis * skyDrawsPerAxis) : 0.0f;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, fans.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
         IndexLeafCache leaves;
         for (size_t q = range.begin(); q != range.end(); ++q) {
-            vec3 sum(0.0f);
-            traceFan(fans[q], pattern, bvh, [&](const Ray& ray, const Hit& hit) {
-                readHitTexels(level0, leaves, ray.at(hit.t), ray.direction, windingCross(scene, hit.triangle),
-                              [&](int32_t voxel, int travel, float weight) {
-                                  sum += weight * faces[size_t(voxel)][size_t(travel ^ 1)];
-                              });
-            });
+            vec3 sum(0.0f), open(0.0f);
+            double squares = 0.0, values = 0.0;  // of every ray's radiance, the sky's too
+            uint32_t escaped = 0;
+            traceFan(
+                fans[q], pattern, bvh,
+                [&](const Ray& ray) {
+                    ++escaped;
+                    if (!sky) return;
+                    vec3 L;
+                    if (scene.sky.hasImage()) {
+                        const SkySeen seen = skySeenAlong(scene.sky, ray.direction);
+                        open += skyShare(seen, glm::dot(fans[q].frame.normal, ray.direction), rays, imageDraws);
+                        L = seen.radiance;
+                    } else {
+                        open += scene.sky.uniform * (kPi / rays);
+                        L = scene.sky.uniform;
+                    }
+                    const double l = (double(L.x) + double(L.y) + double(L.z)) / 3.0;
+                    squares += l * l;
+                    values += l;
+                },
+                [&](const Ray& ray, const Hit& hit) {
+                    vec3 L(0.0f);
+                    readHitTexels(level0, leaves, ray.at(hit.t), ray.direction, windingCross(scene, hit.triangle),
+                                  [&](int32_t voxel, int travel, float weight) {
+                                      L += weight * faces[size_t(voxel)][size_t(travel ^ 1)];
+                                  });
+                    sum += L;
+                    const double l = (double(L.x) + double(L.y) + double(L.z)) / 3.0;
+                    squares += l * l;
+                    values += l;
+                });
             irradiance[q] = sum * (kPi / rays);
+            if (extras) {
+                // E = π/n Σ L_i (the sky's rays too): its variance is π²/n times the rays'.
+                const double mean = values / double(rays);
+                const double spread = std::max(0.0, squares / double(rays) - mean * mean);
+                extras->variance[q] = float(double(kPi) * double(kPi) * spread / double(rays));
+                extras->escaped[q] = escaped;
+                if (sky && scene.sky.samplable() && skyDrawsPerAxis > 0)
+                    open += skyImageDrawsIrradiance(scene, bvh, fans[q].origin, fans[q].frame.normal, fans[q].frame.normal,
+                                                    skyDrawsPerAxis, rays, q);
+                extras->sky[q] = isFinite(open) ? open : vec3(0.0f);
+            }
         }
         if (progress) progress->advance(range.size());
     });

@@ -80,11 +80,24 @@ struct FanStart {
     FanFrame frame{};
 };
 
-// gatherByRays from fans given directly (a lightmap texel's, bake/texel_gather.h). The same
-// bytes at any thread count; `progress` advances once per fan.
+// What a fan's rays found besides the light they read: the sky's irradiance through the rays
+// that left the scene (a uniform sky's radiance on their π/n² each; under an image sky each
+// ray's share against skyDrawsPerAxis² draws from the image, and those draws:
+// lighting/direct_light.h skyShare), the variance of the estimate of the irradiance both give
+// (mean channel), from the spread of the rays' radiance, and the rays that left the scene.
+struct FanExtras {
+    std::vector<vec3> sky;
+    std::vector<float> variance;
+    std::vector<uint32_t> escaped;
+};
+
+// gatherByRays from fans given directly (a lightmap texel's, bake/texel_gather.h); `extras`,
+// when given, receives the sky and the variance per fan. The same bytes at any thread count;
+// `progress` advances once per fan.
 std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& mips,
                              const std::vector<FaceRadiance>& faces, const BvhView& bvh, const TraceSceneView& scene,
-                             int raysPerAxis, Progress* progress = nullptr);
+                             int raysPerAxis, Progress* progress = nullptr, FanExtras* extras = nullptr,
+                             int skyDrawsPerAxis = 0);
 
 // The same gather as a fixed map from the voxels' face light to the points' irradiance
 // (cone/bounces.h FaceTransport): which faces a point's rays read, and how much, does not

@@ -3,10 +3,8 @@
 #include "bake/fan_rays.h"
 #include "bake/ray_gather.h"
 #include "bake/shade_element.h"
-#include "core/progress.h"
 #include "trace/ray_offset.h"
 
-#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -16,19 +14,27 @@ namespace vl {
 
 namespace {
 
-// A record may lie this many lattice spacings (in the texels' size in the scene) from a sample
-// it gives light to: the window's diagonal is √2 spacings, and charts stretch a little.
+// A record may give light to a sample this many lattice spacings away (in the texels' size in
+// the scene) and be of its surface: the window's diagonal is √2 spacings, and charts stretch.
 constexpr float kRecordReach = 2.0f;
 // Cosine between a sample's normal and a record's, below which they are not one surface.
 constexpr float kRecordFacing = 0.7f;
+// The filter's luminance stop: records apart by more than this many standard deviations of
+// their noise are not averaged (SVGF's σ_l).
+constexpr float kNoiseStops = 4.0f;
+// The filter's normal stop: cos^k between two records' normals (SVGF's σ_n).
+constexpr int kNormalPower = 32;
 
 struct Record {
     SurfaceSample sample;
     size_t texel = 0;
     uint64_t seed = 0;
     vec3 ng{0.0f};  // geometric normal on the sample's side
+    bool lit = false;     // a light or an emitter reaches it directly
     bool buried = false;
-    vec3 irradiance{0.0f};
+    vec3 indirect{0.0f};  // E
+    vec3 sky{0.0f};       // E
+    float variance = 0.0f;  // of the mean channel of indirect + sky
 };
 
 // The sample of a texel that stands for it as a record: the one with the largest share.
@@ -63,6 +69,47 @@ float texelWorldSize(const LightmapAtlas& atlas) {
     return sizes[sizes.size() / 2];
 }
 
+float meanOf(const vec3& v) { return (v.x + v.y + v.z) / 3.0f; }
+
+// Gathers `records[first …]`: their fans (laid out from their triangle's first edge, turned by
+// where their texel lies, the R2 sequence over x and y, so neighbours look between each other's
+// rays), whether a light reaches them, whether they are buried, and their light.
+void gatherRecords(std::vector<Record>& records, size_t first, int width, const MipView& mips,
+                   const std::vector<FaceRadiance>& faces, const BrightPatchSplit& bright, const BvhView& bvh,
+                   const TraceSceneView& scene, const TexelGatherSettings& settings) {
+    const size_t count = records.size() - first;
+    std::vector<FanStart> fans(count);
+    DirectLightSettings direct = settings.direct;
+    direct.skyAtSamples = false;
+    tbb::parallel_for(size_t(0), count, [&](size_t k) {
+        Record& r = records[first + k];
+        r.ng = sideGeometricNormal(scene, r.sample);
+        r.lit = maxComponent(directIrradiance(scene, bvh, r.sample, direct, r.seed)) > 0.0f;
+        const vec3* corner = scene.vertices + 3 * size_t(r.sample.triangle);
+        const vec3 edge = corner[1] - corner[0];
+        vec3 tangent = edge - glm::dot(edge, r.sample.normal) * r.sample.normal, bitangent;
+        if (glm::length(tangent) > 1e-12f) tangent = glm::normalize(tangent);
+        else orthonormalBasis(r.sample.normal, tangent, bitangent);
+        const double turn = double(r.texel % size_t(width)) * 0.7548776662466927 +
+                            double(r.texel / size_t(width)) * 0.5698402909980532;
+        fans[k].origin = offsetRayOrigin(r.sample.position, r.ng, bvh.extent);
+        fans[k].frame = fanFrame(r.sample.normal, tangent, float(turn - std::floor(turn)));
+    });
+    FanExtras extras;
+    const std::vector<vec3> gathered =
+        gatherFans(fans, mips, faces, bvh, scene, settings.raysPerAxis, nullptr, &extras, settings.skyDrawsPerAxis);
+    tbb::parallel_for(size_t(0), count, [&](size_t k) {
+        Record& r = records[first + k];
+        r.buried = !r.lit && extras.escaped[k] == 0 && isBuried(scene, bvh, r.sample);
+        if (r.buried) return;
+        float brightVariance = 0.0f;
+        r.indirect = gathered[k] + brightPatchIrradiance(bright, bvh, fans[k].origin, r.sample.normal,
+                                                          settings.brightSamples, r.seed, &brightVariance);
+        r.sky = extras.sky[k];
+        r.variance = extras.variance[k] + brightVariance;
+    });
+}
+
 }  // namespace
 
 int texelGatherSpacing(const LightmapAtlas& atlas, float voxelSize, const TexelGatherSettings& settings) {
@@ -72,16 +119,18 @@ int texelGatherSpacing(const LightmapAtlas& atlas, float voxelSize, const TexelG
     return std::clamp(int(std::lround(1.5f * voxelSize / size)), 1, 8);
 }
 
-Image gatherAtlasIndirect(const LightmapAtlas& atlas, int rowBegin, int rowEnd, const Image* direct,
-                          const MipView& mips, const std::vector<FaceRadiance>& faces, const BrightPatchSplit& bright,
-                          const BvhView& bvh, const TraceSceneView& scene, const TexelGatherSettings& settings) {
+TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowEnd, const Image* direct,
+                              const MipView& mips, const std::vector<FaceRadiance>& faces, const BrightPatchSplit& bright,
+                              const BvhView& bvh, const TraceSceneView& scene, const TexelGatherSettings& settings) {
     const SurfaceSampleSet& set = atlas.receivers;
     const int W = set.width, H = set.height;
-    Image out(W, H, 3);
+    TexelGather out;
+    out.indirect = Image(W, H, 3);
+    out.sky = Image(W, H, 3);
     rowBegin = std::clamp(rowBegin, 0, H);
     rowEnd = std::clamp(rowEnd, rowBegin, H);
     if (rowBegin == rowEnd || mips.levelCount <= 0) return out;
-    const int s = texelGatherSpacing(atlas, mips.voxelSize, settings);
+    const int s = out.spacing = texelGatherSpacing(atlas, mips.voxelSize, settings);
     const float texelSize = std::max(texelWorldSize(atlas), 1e-6f);
     const float reach = kRecordReach * float(s) * texelSize;
     const int half = s / 2;
@@ -90,67 +139,116 @@ Image gatherAtlasIndirect(const LightmapAtlas& atlas, int rowBegin, int rowEnd, 
         return glm::dot(d, d) <= reach * reach && glm::dot(a.normal, r.sample.normal) >= kRecordFacing &&
                glm::abs(glm::dot(d, r.sample.normal)) <= 0.5f * reach;
     };
-    // A texel with direct light is open to it: not buried (shade_element.h isBuried's rule).
-    const auto mayBeBuried = [&](size_t texel) {
-        if (!direct) return true;
-        const int x = int(texel % size_t(W)), y = int(texel / size_t(W));
-        return !(maxComponent(direct->rgb(x, y)) > 0.0f);
-    };
-    const auto prepare = [&](std::vector<Record>& records, size_t first) {
-        tbb::parallel_for(first, records.size(), [&](size_t k) {
-            Record& r = records[k];
-            r.ng = sideGeometricNormal(scene, r.sample);
-            r.buried = mayBeBuried(r.texel) && isBuried(scene, bvh, r.sample);
-        });
-    };
 
-    // The lattice's records, over the rows the band's texels interpolate from.
-    const int firstRow = std::max(0, rowBegin - s), lastRow = std::min(H, rowEnd + s);
-    std::vector<int32_t> latticeSlot(size_t(W) * size_t(lastRow - firstRow), -1);
+    // The lattice: node (i, j) at texel (half + i·s, half + j·s). Its records cover the rows the
+    // band's texels interpolate from and, past them, as far as the filter's passes read.
+    const int passes = std::max(0, settings.filterPasses);
+    const int filterReach = passes > 0 ? 2 * ((1 << passes) - 1) : 0;  // lattice steps
+    const int columns = (W - half + s - 1) / s;
+    const int jBegin = std::max(0, (rowBegin - half) / s - 1 - filterReach);
+    const int jEnd = std::min((H - half + s - 1) / s, (rowEnd - half) / s + 2 + filterReach);
+    const int rows = std::max(0, jEnd - jBegin);
+    std::vector<int32_t> node(size_t(columns) * size_t(rows), -1);
     std::vector<Record> records;
-    for (int y = firstRow; y < lastRow; ++y) {
-        if (y % s != half) continue;
-        for (int x = half; x < W; x += s) {
-            const size_t texel = size_t(y) * size_t(W) + size_t(x);
+    for (int j = jBegin; j < jEnd; ++j)
+        for (int i = 0; i < columns; ++i) {
+            const size_t texel = size_t(half + j * s) * size_t(W) + size_t(half + i * s);
             if (set.sampleCount(texel) == 0) continue;
             Record r;
             r.sample = *mainSample(set, texel);
             r.texel = texel;
             r.seed = texel;
-            latticeSlot[size_t(y - firstRow) * size_t(W) + size_t(x)] = int32_t(records.size());
+            node[size_t(j - jBegin) * size_t(columns) + size_t(i)] = int32_t(records.size());
             records.push_back(r);
         }
-    }
-    const size_t latticeRecords = records.size();
-    prepare(records, 0);
+    const size_t latticeRecords = out.records = records.size();
+    gatherRecords(records, 0, W, mips, faces, bright, bvh, scene, settings);
+    const auto nodeAt = [&](int i, int j) -> int32_t {
+        if (i < 0 || i >= columns || j < jBegin || j >= jEnd) return -1;
+        return node[size_t(j - jBegin) * size_t(columns) + size_t(i)];
+    };
 
-    // The lattice records around texel (x, y), the lattice points at or before x and y and the
-    // next ones, with their bilinear weights; those not on the sample's surface, or buried,
-    // weigh nothing.
+    // The edge-stopping filter over the lattice's records, pass p at a step of 2^p nodes, each
+    // reading the 5 × 5 nodes of its step (the B3 spline's weights) that lie on the record's
+    // surface and whose light its noise explains; the variance goes through as Σ w² σ² / (Σ w)².
+    for (int pass = 0; pass < passes; ++pass) {
+        const int step = 1 << pass;
+        constexpr float kernel[3] = {3.0f / 8.0f, 1.0f / 4.0f, 1.0f / 16.0f};
+        std::vector<vec3> indirect(latticeRecords), sky(latticeRecords);
+        std::vector<float> variance(latticeRecords);
+        tbb::parallel_for(jBegin, jEnd, [&](int j) {
+            for (int i = 0; i < columns; ++i) {
+                const int32_t p = nodeAt(i, j);
+                if (p < 0) continue;
+                const Record& rp = records[size_t(p)];
+                if (rp.buried) {
+                    indirect[size_t(p)] = rp.indirect;
+                    sky[size_t(p)] = rp.sky;
+                    variance[size_t(p)] = rp.variance;
+                    continue;
+                }
+                const float lp = meanOf(rp.indirect + rp.sky);
+                const float stop = kNoiseStops * std::sqrt(std::max(rp.variance, 0.0f)) + 1e-6f * (lp + 1e-6f);
+                vec3 sumIndirect(0.0f), sumSky(0.0f);
+                float total = 0.0f, sumVariance = 0.0f;
+                for (int dj = -2; dj <= 2; ++dj)
+                    for (int di = -2; di <= 2; ++di) {
+                        const int32_t q = nodeAt(i + di * step, j + dj * step);
+                        if (q < 0) continue;
+                        const Record& rq = records[size_t(q)];
+                        if (rq.buried) continue;
+                        // One surface: within reach of its lattice distance, in its plane, facing its way.
+                        const vec3 d = rq.sample.position - rp.sample.position;
+                        const float apart = (std::sqrt(float(di * di + dj * dj)) * float(step) + 1.0f) * reach;
+                        if (glm::dot(d, d) > apart * apart) continue;
+                        if (glm::abs(glm::dot(d, rp.sample.normal)) > 0.25f * reach + 0.1f * glm::length(d)) continue;
+                        const float facing = glm::dot(rp.sample.normal, rq.sample.normal);
+                        if (!(facing > kRecordFacing)) continue;
+                        const float lq = meanOf(rq.indirect + rq.sky);
+                        const float w = kernel[std::abs(di)] * kernel[std::abs(dj)] * std::pow(facing, float(kNormalPower)) *
+                                        std::exp(-std::abs(lp - lq) / stop);
+                        sumIndirect += w * rq.indirect;
+                        sumSky += w * rq.sky;
+                        sumVariance += w * w * rq.variance;
+                        total += w;
+                    }
+                indirect[size_t(p)] = sumIndirect / total;
+                sky[size_t(p)] = sumSky / total;
+                variance[size_t(p)] = sumVariance / (total * total);
+            }
+        });
+        for (size_t k = 0; k < latticeRecords; ++k) {
+            records[k].indirect = indirect[k];
+            records[k].sky = sky[k];
+            records[k].variance = variance[k];
+        }
+    }
+
+    // The lattice records around texel (x, y) on a sample's surface (the nodes at or before x
+    // and y and the next ones) with their bilinear weights; whether one of them is buried.
     struct Around {
         int32_t slot[4];
         float weight[4];
-        bool buriedNear;  // a record on the sample's surface around it is buried
+        bool buriedNear;
     };
     const auto around = [&](int x, int y, const SurfaceSample& sample) {
         Around a;
         a.buriedNear = false;
-        const int x0 = int(std::floor(float(x - half) / float(s))) * s + half;
-        const int y0 = int(std::floor(float(y - half) / float(s))) * s + half;
-        for (int j = 0; j < 2; ++j)
-            for (int i = 0; i < 2; ++i) {
-                const int lx = x0 + i * s, ly = y0 + j * s, k = 2 * j + i;
+        const int i0 = int(std::floor(float(x - half) / float(s))), j0 = int(std::floor(float(y - half) / float(s)));
+        for (int dj = 0; dj < 2; ++dj)
+            for (int di = 0; di < 2; ++di) {
+                const int k = 2 * dj + di;
                 a.slot[k] = -1;
                 a.weight[k] = 0.0f;
-                if (lx < 0 || lx >= W || ly < firstRow || ly >= lastRow) continue;
-                const int32_t slot = latticeSlot[size_t(ly - firstRow) * size_t(W) + size_t(lx)];
+                const int32_t slot = nodeAt(i0 + di, j0 + dj);
                 if (slot < 0 || !compatible(sample, records[size_t(slot)])) continue;
                 if (records[size_t(slot)].buried) {
                     a.buriedNear = true;
                     continue;
                 }
                 a.slot[k] = slot;
-                a.weight[k] = (1.0f - float(std::abs(x - lx)) / float(s)) * (1.0f - float(std::abs(y - ly)) / float(s));
+                a.weight[k] = (1.0f - float(std::abs(x - (half + (i0 + di) * s))) / float(s)) *
+                              (1.0f - float(std::abs(y - (half + (j0 + dj) * s))) / float(s));
             }
         return a;
     };
@@ -158,14 +256,13 @@ Image gatherAtlasIndirect(const LightmapAtlas& atlas, int rowBegin, int rowEnd, 
         return a.weight[0] > 0.0f || a.weight[1] > 0.0f || a.weight[2] > 0.0f || a.weight[3] > 0.0f;
     };
 
-    // Samples no lattice record applies to (a chart narrower than the lattice, a chart's
-    // corner, beside closed geometry) share records of their own, one per s × s block of the
-    // atlas and surface: each block is scanned whole, in texel order, so a block's records do
-    // not depend on the band.
+    // Samples no lattice record applies to share records of their own, one per s × s block of
+    // the atlas and surface: each block is scanned whole, in texel order, so a block's records
+    // do not depend on the band.
     const int blockBegin = rowBegin / s, blockEnd = (rowEnd + s - 1) / s;
     const int blocksAcross = (W + s - 1) / s;
     std::vector<std::vector<Record>> blockRecords(size_t(blockEnd - blockBegin) * size_t(blocksAcross));
-    std::vector<std::vector<std::pair<uint32_t, uint32_t>>> blockUse(blockRecords.size());  // (sample, record in block)
+    std::vector<std::vector<std::pair<uint32_t, uint32_t>>> blockUse(blockRecords.size());  // (sample, its record)
     tbb::parallel_for(size_t(0), blockRecords.size(), [&](size_t b) {
         const int bx = int(b % size_t(blocksAcross)), by = blockBegin + int(b / size_t(blocksAcross));
         std::vector<Record>& own = blockRecords[b];
@@ -188,35 +285,13 @@ Image gatherAtlasIndirect(const LightmapAtlas& atlas, int rowBegin, int rowEnd, 
                 }
             }
     });
-    std::vector<size_t> blockFirst(blockRecords.size() + 1, 0);
+    std::vector<size_t> blockFirst(blockRecords.size(), 0);
     for (size_t b = 0; b < blockRecords.size(); ++b) {
         blockFirst[b] = records.size();
         records.insert(records.end(), blockRecords[b].begin(), blockRecords[b].end());
     }
-    prepare(records, latticeRecords);
-
-    // Each record's fan, turned by where its texel lies (the R2 sequence over x and y), so
-    // neighbouring records look between each other's rays.
-    std::vector<FanStart> fans(records.size());
-    tbb::parallel_for(size_t(0), records.size(), [&](size_t k) {
-        const Record& r = records[k];
-        // Laid out from the sample's triangle's first edge, which turns with the scene.
-        const vec3* corner = scene.vertices + 3 * size_t(r.sample.triangle);
-        const vec3 edge = corner[1] - corner[0];
-        vec3 tangent = edge - glm::dot(edge, r.sample.normal) * r.sample.normal, bitangent;
-        if (glm::length(tangent) > 1e-12f) tangent = glm::normalize(tangent);
-        else orthonormalBasis(r.sample.normal, tangent, bitangent);
-        const double turn = double(r.texel % size_t(W)) * 0.7548776662466927 + double(r.texel / size_t(W)) * 0.5698402909980532;
-        fans[k].origin = offsetRayOrigin(r.sample.position, r.ng, bvh.extent);
-        fans[k].frame = fanFrame(r.sample.normal, tangent, float(turn - std::floor(turn)));
-    });
-    const std::vector<vec3> gathered = gatherFans(fans, mips, faces, bvh, scene, settings.raysPerAxis);
-    tbb::parallel_for(size_t(0), records.size(), [&](size_t k) {
-        Record& r = records[k];
-        if (!r.buried)
-            r.irradiance =
-                gathered[k] + brightPatchIrradiance(bright, bvh, fans[k].origin, r.sample.normal, settings.brightSamples, r.seed);
-    });
+    out.ownRecords = records.size() - latticeRecords;
+    gatherRecords(records, latticeRecords, W, mips, faces, bright, bvh, scene, settings);
 
     // Each sample: its lattice records, bilinearly, else its block's record.
     tbb::parallel_for(rowBegin, rowEnd, [&](int y) {
@@ -225,28 +300,37 @@ Image gatherAtlasIndirect(const LightmapAtlas& atlas, int rowBegin, int rowEnd, 
             const size_t texel = size_t(y) * size_t(W) + size_t(x);
             if (set.sampleCount(texel) == 0) continue;
             const size_t b = size_t(by) * size_t(blocksAcross) + size_t(x / s);
-            vec3 texelValue(0.0f);
+            vec3 indirect(0.0f), sky(0.0f);
             for (uint32_t k = set.begin[texel]; k < set.begin[texel + 1]; ++k) {
-                const Around a = around(x, y, set.samples[k]);
-                vec3 E(0.0f);
+                const SurfaceSample& sample = set.samples[k];
+                const Around a = around(x, y, sample);
+                vec3 Ei(0.0f), Es(0.0f);
                 if (anyWeight(a)) {
                     float total = 0.0f;
                     for (int c = 0; c < 4; ++c)
                         if (a.weight[c] > 0.0f) {
-                            E += a.weight[c] * records[size_t(a.slot[c])].irradiance;
+                            Ei += a.weight[c] * records[size_t(a.slot[c])].indirect;
+                            Es += a.weight[c] * records[size_t(a.slot[c])].sky;
                             total += a.weight[c];
                         }
-                    E /= total;
-                    // Beside closed geometry (a floor at a block's foot) it may be inside it.
-                    if (a.buriedNear && mayBeBuried(texel) && isBuried(scene, bvh, set.samples[k])) E = vec3(0.0f);
+                    Ei /= total;
+                    Es /= total;
+                    // Beside closed geometry (a floor at a block's foot) the sample may be inside it.
+                    if (a.buriedNear && !(direct && maxComponent(direct->rgb(x, y)) > 0.0f) && isBuried(scene, bvh, sample))
+                        Ei = Es = vec3(0.0f);
                 } else {
                     const auto& uses = blockUse[b];
                     const auto use = std::lower_bound(uses.begin(), uses.end(), std::make_pair(k, uint32_t(0)));
-                    if (use != uses.end() && use->first == k) E = records[blockFirst[b] + use->second].irradiance;
+                    if (use != uses.end() && use->first == k) {
+                        Ei = records[blockFirst[b] + use->second].indirect;
+                        Es = records[blockFirst[b] + use->second].sky;
+                    }
                 }
-                texelValue += set.samples[k].weight * E;
+                indirect += sample.weight * Ei;
+                sky += sample.weight * Es;
             }
-            out.setRgb(x, y, texelValue * kInvPi);
+            out.indirect.setRgb(x, y, indirect * kInvPi);
+            out.sky.setRgb(x, y, sky * kInvPi);
         }
     });
     return out;

@@ -36,6 +36,9 @@ struct DirectLightSettings {
     // --reference-… --vct 'sky-strata=M'`, 2026-11-27): 10 holds issue 16's 5% in about the
     // time the speed issue's default took (0.39 s).
     int skyStrata = 10;
+    // false: the sky is left out here, for receivers that gather it with their indirect light
+    // (a lightmap's records, bake/texel_gather.h).
+    bool skyAtSamples = true;
 };
 
 // cos θ_r · cos θ_e / d² between a receiver (p; geometric normal ng, shading normal ns) and
@@ -358,7 +361,7 @@ VL_HOSTDEV inline vec3 directIrradiance(const TraceSceneView& s, const BvhView& 
         else
             e += punctualLightIrradiance(bvh, light, r.position, ng, r.normal, vec2(0.0f));
     }
-    e += skyIrradiance(s, bvh, r.position, ng, r.normal, settings.skyStrata, seed);
+    if (settings.skyAtSamples) e += skyIrradiance(s, bvh, r.position, ng, r.normal, settings.skyStrata, seed);
     if (s.emitterCount > kMaxVisitedEmitters)
         return e + sampledEmittersIrradiance(s, bvh, r.position, ng, r.normal, settings.emitterStrata, seed);
     for (uint32_t k = 0; k < s.emitterCount; ++k) {
