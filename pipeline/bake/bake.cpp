@@ -55,6 +55,12 @@ double estimatedVoxels(const Scene& scene, double voxelSize) {
     return 2.0 * surfaceArea(scene) / (voxelSize * voxelSize);
 }
 
+std::string real(double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3g", v);
+    return text;
+}
+
 std::string gib(double bytes) {
     char text[32];
     std::snprintf(text, sizeof text, "%.1f GiB", bytes / (1024.0 * 1024.0 * 1024.0));
@@ -147,25 +153,55 @@ std::string generatedAtlasName(const LightmapSettings& settings) {
 ReceiverScene::ReceiverScene(const Scene& scene)
     : triangles(gatherTriangles(scene)), bvh(Bvh::build(triangles)), traceScene(TraceScene::build(scene, triangles)) {}
 
-GeneratedUvs generateSharedAtlasUvs(Scene& scene, const BakeSettings& settings, Diagnostics& diagnostics) {
+GeneratedUvs generateSharedAtlasUvs(Scene& scene, const BakeSettings& settings, double voxelSize, Diagnostics& diagnostics) {
     GeneratedUvs out;
-    LightmapSettings& lightmap = out.lightmap;  // generated UVs may need a larger atlas
+    LightmapSettings& lightmap = out.lightmap;
     lightmap = settings.lightmap;
+    if (!settings.outputs.lightmaps) return out;
+    // A texel size asked (lightmap-texel) or chosen (lightmap-res auto) sizes the atlases of
+    // the meshes' own TEXCOORD_1 from their density, and the generated charts' atlas to fit.
+    const double autoTexel = kAutoTexelPerVoxel * voxelSize;
+    sizeAuthoredAtlases(scene, lightmap, autoTexel, diagnostics);
     // Generated UVs for the meshes of the shared atlas that have none: into the shared atlas
     // where none of its meshes has TEXCOORD_1, else into an image of their own (their charts
     // cannot share another layout's). Meshes of atlas groups, or of one image per mesh, keep
     // what they have.
-    const MeshesWithoutUv1 withoutUv1 = settings.outputs.lightmaps && settings.generateLightmapUvs
-                                            ? sharedAtlasMeshesWithoutUv1(scene, settings.lightmap)
-                                            : MeshesWithoutUv1{};
+    const MeshesWithoutUv1 withoutUv1 =
+        settings.generateLightmapUvs ? sharedAtlasMeshesWithoutUv1(scene, settings.lightmap) : MeshesWithoutUv1{};
     if (withoutUv1.meshes.empty()) return out;
-    out.report = generateLightmapUvs(scene, withoutUv1.meshes, settings.lightmap.width, settings.lightmap.height);
+    AtlasRequest request;
+    request.width = settings.lightmap.width;
+    request.height = settings.lightmap.height;
+    if (settings.lightmap.texelSize > 0.0) {
+        request.texelSize = settings.lightmap.texelSize;
+    } else if (settings.lightmap.autoResolution) {
+        request.texelSize = autoTexel;
+        request.maxSide = kMaxAutoAtlasSide;
+        request.powerOfTwo = true;
+    }
+    out.report = generateLightmapUvs(scene, withoutUv1.meshes, request);
     const LightmapUvReport& uvs = *out.report;
     if (!settings.quiet) std::fprintf(stderr, "%s\n", describeLightmapUvs(uvs).c_str());
     out.layouts.resize(scene.meshes.size());
     for (size_t m = 0; m < scene.meshes.size(); ++m) out.layouts[m].source = scene.meshes[m].source;
     for (const uint32_t m : withoutUv1.meshes)
         out.layouts[m] = {scene.meshes[m].source, scene.meshes[m].uv1, scene.meshes[m].indices};
+    if (settings.lightmap.texelSize > 0.0 && uvs.texelSize > settings.lightmap.texelSize * (1.0 + 1e-9))
+        diagnostics.warn(scene.sourcePath + ": the generated lightmap UVs' " + std::to_string(uvs.charts) +
+                         " charts need more than " + std::to_string(uvs.width) + " x " + std::to_string(uvs.height) +
+                         " texels at lightmap-texel " + real(settings.lightmap.texelSize) + " m: they are baked at " +
+                         real(uvs.texelSize) + " m per texel");
+    if (!uvs.smallCharts.empty()) {
+        std::string meshes;
+        for (size_t k = 0; k < uvs.smallCharts.size() && k < 5; ++k)
+            meshes += (k ? ", " : "") + uvs.smallCharts[k].mesh + " (" + std::to_string(uvs.smallCharts[k].charts) + ")";
+        if (uvs.smallCharts.size() > 5) meshes += " and " + std::to_string(uvs.smallCharts.size() - 5) + " more meshes";
+        diagnostics.warn(scene.sourcePath + ": " + std::to_string(uvs.smallChartCount()) + " of the generated lightmap UVs' " +
+                         std::to_string(uvs.charts) + " charts are under " + real(kSmallChartTexels) + " x " +
+                         real(kSmallChartTexels) + " texels at " + real(uvs.texelSize) +
+                         " m per texel, and no neighbouring chart could take them: " + meshes +
+                         " (bake.json lists them; a larger lightmap-res or a smaller lightmap-texel gives them more)");
+    }
     if (withoutUv1.othersHaveUv1) {
         AtlasGroup generated;
         generated.name = generatedAtlasName(lightmap);
@@ -174,12 +210,8 @@ GeneratedUvs generateSharedAtlasUvs(Scene& scene, const BakeSettings& settings, 
         generated.height = uvs.height;
         generated.origin = "generated lightmap UVs";
         lightmap.atlases.push_back(generated);
-    } else if (uvs.width != lightmap.width || uvs.height != lightmap.height) {
-        diagnostics.warn(scene.sourcePath + ": the generated lightmap UVs' " + std::to_string(uvs.charts) +
-                         " charts need a " + std::to_string(uvs.width) + " x " + std::to_string(uvs.height) +
-                         " atlas, not " + std::to_string(lightmap.width) + " x " + std::to_string(lightmap.height) +
-                         ": the lightmap is baked at that size");
-        lightmap.width = uvs.width;
+    } else {
+        lightmap.width = uvs.width;  // the size asked, or the one sized for a texel size
         lightmap.height = uvs.height;
     }
     return out;
@@ -205,15 +237,17 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
     checkLightAttenuationNames(scene, settings.lighting);
     if (settings.outputs.lightmaps) checkAtlasGroups(scene, settings.lightmap);
     const auto uvStart = std::chrono::steady_clock::now();
-    GeneratedUvs generated = generateSharedAtlasUvs(scene, settings, diagnostics);
+    GeneratedUvs generated = generateSharedAtlasUvs(scene, settings, voxelSize, diagnostics);
     if (generated.report) {
         result.stages.push_back(
             {"lightmap uvs", std::chrono::duration<double>(std::chrono::steady_clock::now() - uvStart).count()});
         result.lightmapUvs = generated.report;
         result.generatedLayouts = std::move(generated.layouts);
-        BakeSettings grown = settings;
-        grown.lightmap = generated.lightmap;
-        checkMemoryBudget(scene, grown, voxelSize);
+    }
+    if (generated.report || settings.lightmap.autoResolution || settings.lightmap.texelSize > 0.0) {
+        BakeSettings sized = settings;  // the atlases as sized for the charts or the texel size
+        sized.lightmap = generated.lightmap;
+        checkMemoryBudget(scene, sized, voxelSize);
     }
     stages.lightmap = std::move(generated.lightmap);
     applySkySettings(settings, scene);

@@ -86,14 +86,16 @@ struct ReceiverScene {
 
 // Lightmap UVs for the shared atlas's meshes that have no TEXCOORD_1 (when the settings
 // generate them), written into `scene`, and the lightmap settings they leave: the shared atlas
-// grown to fit their charts (a warning says so), or a group of their own appended where other
-// meshes of the shared atlas have TEXCOORD_1.
+// at lightmap-res, or sized for lightmap-texel or `lightmap-res auto` (at least
+// kAutoTexelPerVoxel × voxelSize per texel), or a group of their own appended where other
+// meshes of the shared atlas have TEXCOORD_1 (which the settings' texel size sizes too).
+// Charts under kSmallChartTexels that no neighbour took are a warning naming their meshes.
 struct GeneratedUvs {
     LightmapSettings lightmap;
     std::optional<LightmapUvReport> report;  // none generated: empty
     std::vector<GeneratedLayout> layouts;    // then per scene mesh: what glTF out writes
 };
-GeneratedUvs generateSharedAtlasUvs(Scene& scene, const BakeSettings& settings, Diagnostics& diagnostics);
+GeneratedUvs generateSharedAtlasUvs(Scene& scene, const BakeSettings& settings, double voxelSize, Diagnostics& diagnostics);
 
 struct VoxelStages {
     BakeResult result;          // every field but lightmaps and images

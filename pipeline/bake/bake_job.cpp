@@ -101,9 +101,15 @@ nlohmann::json reportJson(const BakeReport& report, const BakeSettings& settings
     json["gather_visibility_set_by"] = report.gatherVisibility.setBy;
     if (report.lightmapUvs) {
         const LightmapUvReport& uvs = *report.lightmapUvs;
-        json["lightmap_uvs"] = {{"meshes", uvs.meshes},         {"charts", uvs.charts},
-                                {"texel_size", uvs.texelSize},  {"chart_area_share", uvs.occupancy},
-                                {"max_stretch", uvs.maxStretch}, {"mean_stretch", uvs.meanStretch}};
+        json["lightmap_uvs"] = {{"meshes", uvs.meshes},          {"charts", uvs.charts},
+                                {"charts_grown", uvs.grownCharts}, {"width", uvs.width},
+                                {"height", uvs.height},          {"texel_size", uvs.texelSize},
+                                {"chart_area_share", uvs.occupancy}, {"max_stretch", uvs.maxStretch},
+                                {"mean_stretch", uvs.meanStretch}, {"small_charts", nlohmann::json::array()}};
+        if (uvs.askedTexelSize > 0.0) json["lightmap_uvs"]["texel_size_asked"] = uvs.askedTexelSize;
+        // Charts under kSmallChartTexels a side that no neighbour could take, per mesh.
+        for (const SmallCharts& small : uvs.smallCharts)
+            json["lightmap_uvs"]["small_charts"].push_back({{"mesh", small.mesh}, {"charts", small.charts}});
     }
     json["lightmap_texels"] = report.lightmapTexels;
     json["covered_texels"] = report.coveredTexels;

@@ -4,7 +4,9 @@
 #include "core/error.h"
 #include "scene/scene.h"
 
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <sstream>
 #include <utility>
 
@@ -113,9 +115,33 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          }},
         {"texel-gather-spacing", "texels between a lightmap's gather records; 0: about 1.5 voxels (default 0)",
          [](S& s, const std::string& v) { s.texelGatherSpacing = parseIntSetting("texel-gather-spacing", v, 0, 64); }},
-        {"lightmap-res", "lightmap atlas width and height in texels (default 256)",
+        {"lightmap-res", "lightmap atlas width and height in texels, exactly (generated UVs get the texel size that fits them); auto: the bake sizes each atlas, the smallest power-of-two square that holds it at texels of half a voxel or finer, up to 4096 (default 256)",
          [](S& s, const std::string& v) {
-             s.lightmap.width = s.lightmap.height = parseIntSetting("lightmap-res", v, 1, kMaxLightmapResolution);
+             if (v == "auto") {
+                 s.lightmap.autoResolution = true;
+                 return;
+             }
+             char* end = nullptr;
+             errno = 0;
+             const long long n = std::strtoll(v.c_str(), &end, 10);
+             if (v.empty() || *end != '\0' || errno == ERANGE)
+                 throw SettingsError("setting lightmap-res: '" + v + "' is neither a number of texels nor auto");
+             if (n < 1 || n > kMaxLightmapResolution)
+                 throw SettingsError("setting lightmap-res = " + v + " is out of range [1, " +
+                                     std::to_string(kMaxLightmapResolution) + "] (or auto)");
+             s.lightmap.width = s.lightmap.height = static_cast<int>(n);
+             s.lightmap.autoResolution = false;
+         }},
+        {"lightmap-texel", "metres per lightmap texel: each atlas the smallest square (a multiple of 4 texels a side, up to 8192) that holds its charts at it; overrides lightmap-res; 0: none (default 0)",
+         [](S& s, const std::string& v) {
+             char* end = nullptr;
+             const double texel = std::strtod(v.c_str(), &end);
+             if (v.empty() || *end != '\0' || !std::isfinite(texel))
+                 throw SettingsError("setting lightmap-texel: '" + v + "' is not a number of metres");
+             if (texel < 0.0 || (texel > 0.0 && texel < 1e-6) || texel > 1e6)
+                 throw SettingsError("setting lightmap-texel = " + v +
+                                     " must be a texel size in metres from 1e-6 to 1e6 (or 0: none)");
+             s.lightmap.texelSize = texel;
          }},
         {"lightmap-subsamples", "n × n sub-texel probes per texel (default 4)",
          [](S& s, const std::string& v) { s.lightmap.subsamplesPerAxis = parseIntSetting("lightmap-subsamples", v, 1, 8); }},
@@ -234,7 +260,8 @@ std::string describeBakeSettings(const BakeSettings& s) {
         << ", gather-visibility=" << toString(s.gatherVisibility) << ", gather-rays=" << s.gatherRays
         << ", bounce-rays=" << s.bounceRays << ", bounce-gather-level=" << s.bounceGatherLevel
         << ", lightmap-gather=" << (s.lightmapGather == LightmapGather::Texels ? "texels" : "points")
-        << ", texel-gather-spacing=" << s.texelGatherSpacing << ", lightmap-res=" << s.lightmap.width
+        << ", texel-gather-spacing=" << s.texelGatherSpacing << ", lightmap-res="
+        << (s.lightmap.autoResolution ? std::string("auto") : std::to_string(s.lightmap.width))
         << ", lightmap-subsamples=" << s.lightmap.subsamplesPerAxis << ", emitter-strata=" << s.direct.emitterStrata
         << ", width=" << s.imageWidth << ", height=" << s.imageHeight;
     if (maxComponent(s.sky) > 0.0f) out << ", sky=" << s.sky.x << "," << s.sky.y << "," << s.sky.z;
@@ -245,6 +272,7 @@ std::string describeBakeSettings(const BakeSettings& s) {
         out << ", attenuation=" << s.lighting.attenuation->constant << "," << s.lighting.attenuation->linear << ","
             << s.lighting.attenuation->quadratic;
     if (s.device != cuda::DeviceChoice::Cpu) out << ", device=" << cuda::toString(s.device);
+    if (s.lightmap.texelSize > 0.0) out << ", lightmap-texel=" << real(s.lightmap.texelSize);
     if (!s.generateLightmapUvs) out << ", lightmap-uvs=false";
     if (s.filesOutsideScene) out << ", files-outside-scene=true";
     if (!s.voxel.ownFrame) out << ", grid-frame=world";

@@ -5,6 +5,7 @@
 #include "trace/bvh.h"
 #include "trace/bvh_traverse.h"
 #include "trace/trace_scene.h"
+#include "unwrap/lightmap_uvs.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -12,6 +13,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <utility>
 
@@ -61,6 +63,9 @@ void LightmapSettings::validate() const {
     if (width < 1 || height < 1 || width > kMaxLightmapResolution || height > kMaxLightmapResolution)
         throw SettingsError("lightmap-res: " + std::to_string(width) + " x " + std::to_string(height) + " is outside 1.." +
                             std::to_string(kMaxLightmapResolution));
+    if (!(texelSize >= 0.0) || !std::isfinite(texelSize))
+        throw SettingsError("lightmap-texel: " + std::to_string(texelSize) +
+                            " must be a length in metres per texel above 0 (0: none)");
     if (subsamplesPerAxis < 1 || subsamplesPerAxis > 8)
         throw SettingsError("lightmap-subsamples: " + std::to_string(subsamplesPerAxis) + " is outside 1..8");
     if (!atlases.empty() && atlasPerMesh)
@@ -354,6 +359,55 @@ AtlasMembers assignAtlasMembers(const Scene& scene, const LightmapSettings& sett
 }
 
 }  // namespace
+
+int atlasSideForTexel(const Scene& scene, const std::vector<uint32_t>& meshes, double texel, bool powerOfTwo, int maxSide) {
+    double surface = 0.0, uv = 0.0;
+    for (const uint32_t m : meshes) {
+        const Mesh& mesh = scene.meshes[m];
+        if (mesh.uv1.empty()) continue;
+        for (size_t t = 0; t < mesh.triangleCount(); ++t) {
+            const uint32_t* i = &mesh.indices[3 * t];
+            surface += 0.5 * double(glm::length(glm::cross(mesh.positions[i[1]] - mesh.positions[i[0]],
+                                                          mesh.positions[i[2]] - mesh.positions[i[0]])));
+            const vec2 a = mesh.uv1[i[0]], b = mesh.uv1[i[1]], c = mesh.uv1[i[2]];
+            uv += 0.5 * std::abs(double(b.x - a.x) * (c.y - a.y) - double(b.y - a.y) * (c.x - a.x));
+        }
+    }
+    if (!(uv > 0.0) || !(texel > 0.0)) return 0;
+    const double side = std::sqrt(surface / uv) / texel;
+    int rounded = 16;
+    if (powerOfTwo)
+        while (rounded < side && rounded < maxSide) rounded *= 2;
+    else
+        rounded = std::max(16, 4 * static_cast<int>(std::ceil(side / 4.0 - 1e-9)));
+    return std::min(rounded, maxSide);
+}
+
+void sizeAuthoredAtlases(const Scene& scene, LightmapSettings& settings, double autoTexel, Diagnostics& diagnostics) {
+    const bool byTexel = settings.texelSize > 0.0;
+    if (!byTexel && !settings.autoResolution) return;
+    const double texel = byTexel ? settings.texelSize : autoTexel;
+    const int maxSide = byTexel ? kMaxAtlasSide : kMaxAutoAtlasSide;
+    const AtlasMembers members = assignAtlasMembers(scene, settings, nullptr);
+    const auto side = [&](const std::vector<uint32_t>& meshes, const std::string& atlas) {
+        const int n = atlasSideForTexel(scene, meshes, texel, !byTexel, maxSide);
+        if (byTexel && n == maxSide && atlasSideForTexel(scene, meshes, texel, false, 2 * maxSide) > maxSide) {
+            char metres[32];
+            std::snprintf(metres, sizeof metres, "%.3g", texel);
+            diagnostics.warn(scene.sourcePath + ": " + atlas + " needs more than " + std::to_string(maxSide) + " x " +
+                             std::to_string(maxSide) + " texels at lightmap-texel " + metres + " m: it is baked at " +
+                             std::to_string(maxSide) + " x " + std::to_string(maxSide) + ", coarser than asked");
+        }
+        return n;
+    };
+    if (!members.shared.empty())
+        if (const int n = side(members.shared, "the lightmap (its meshes' own TEXCOORD_1)"); n > 0) settings.width = settings.height = n;
+    for (size_t g = 0; g < settings.atlases.size(); ++g) {
+        AtlasGroup& group = settings.atlases[g];
+        if (group.width != 0 || members.grouped[g].empty()) continue;  // a resolution of its own stands
+        if (const int n = side(members.grouped[g], atlasReference(group)); n > 0) group.width = group.height = n;
+    }
+}
 
 MeshesWithoutUv1 sharedAtlasMeshesWithoutUv1(const Scene& scene, const LightmapSettings& settings) {
     MeshesWithoutUv1 found;

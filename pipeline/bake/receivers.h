@@ -39,6 +39,10 @@ class Bvh;
 class TraceScene;
 
 constexpr int kMaxLightmapResolution = 16384;
+// `lightmap-res auto`: texels at least this fine, in voxels: the bake's indirect light varies
+// no faster than its voxels (its direct light is traced per texel, and sharpens with a finer
+// lightmap-texel).
+constexpr double kAutoTexelPerVoxel = 0.5;
 
 struct AtlasGroup {
     std::string name;                 // the image's name and file stem: letters, digits, '-', '_'
@@ -52,6 +56,14 @@ struct AtlasGroup {
 struct LightmapSettings {
     int width = 256;
     int height = 256;
+    // The shared atlas's (and each atlas group's without a resolution of its own) size chosen
+    // by the bake instead (`lightmap-res auto`): the smallest power-of-two square that holds
+    // its charts at texels of kAutoTexelPerVoxel voxels or finer (unwrap/lightmap_uvs.h).
+    bool autoResolution = false;
+    // Metres per texel (`lightmap-texel`, 0: none): overrides width, height and autoResolution;
+    // each atlas is then the smallest square, a multiple of 4 texels a side, that holds its
+    // charts at that texel.
+    double texelSize = 0.0;
     int subsamplesPerAxis = 4;     // n: sub-texel probe grid n × n (1 = texel centres only), 1..8
     bool samplePerTriangle = true; // one sample per (texel, triangle) at its covered points' centroid
     bool atlasPerMesh = false;     // each mesh its own image instead of one shared atlas
@@ -78,6 +90,16 @@ struct LightmapAtlas {
 // "lightmap" names a group only when no mesh is left for the shared atlas (SettingsError
 // naming the group and where it was declared).
 void checkAtlasGroups(const Scene& scene, const LightmapSettings& settings);
+
+// The side of a square atlas holding `meshes`' own TEXCOORD_1 at `texel` metres per texel on
+// average (their 3D area over their uv area), rounded up to a multiple of 4 (or to a power of
+// two) within 16..maxSide; 0 where they cover no uv area.
+int atlasSideForTexel(const Scene& scene, const std::vector<uint32_t>& meshes, double texel, bool powerOfTwo, int maxSide);
+
+// The shared atlas's and the size-less atlas groups' sizes for authored TEXCOORD_1 where the
+// settings ask for a texel size (lightmap-texel, or `lightmap-res auto` with autoTexel), into
+// `settings`; a texel size that needs more than maxSide a side gets maxSide, with a warning.
+void sizeAuthoredAtlases(const Scene& scene, LightmapSettings& settings, double autoTexel, Diagnostics& diagnostics);
 
 // What generated lightmap UVs are for (bake.cpp): the meshes the shared atlas would bake (with
 // triangles, not emitting, named by no group) that have no TEXCOORD_1, and whether some of its

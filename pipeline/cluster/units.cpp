@@ -160,15 +160,16 @@ SceneUnits planSceneUnits(const BakeJob& job, int bands, int cameras) {
     if (s.outputs.images) units.cameras = cameras >= 0 ? cameras : static_cast<int>(bakeCameras(scene, s).size());
     if (!s.outputs.lightmaps) return units;
     // The atlases as the bake will make them: the scene anchored at its voxel size and given
-    // its generated lightmap UVs (zdm2: 256² asked, 1024² needed), the same floats as the bake's.
+    // its generated lightmap UVs (sized by lightmap-texel or auto), the same floats as the bake's.
     VoxelSettings voxel = s.voxel;
     if (voxel.ownFrame) turnToOwnFrame(scene);
     voxel.voxelSize = chooseVoxelSize(scene, s).voxelSize;
-    anchorToVoxelGrid(scene, voxelSizeFor(scene, voxel));
+    const double voxelSize = voxelSizeFor(scene, voxel);
+    anchorToVoxelGrid(scene, voxelSize);
     Diagnostics quiet(false, false);
     BakeSettings silent = s;
     silent.quiet = true;
-    const GeneratedUvs generated = generateSharedAtlasUvs(scene, silent, quiet);
+    const GeneratedUvs generated = generateSharedAtlasUvs(scene, silent, voxelSize, quiet);
     for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, generated.lightmap, quiet)) {
         const double texels = double(atlas.receivers.width) * atlas.receivers.height;
         const int wanted = bands > 0 ? bands : static_cast<int>(std::ceil(texels / kTexelsPerBand));

@@ -79,7 +79,11 @@ void writeVoxelState(const VoxelStages& stages, size_t triangles, const std::vec
         const LightmapUvReport& u = *r.lightmapUvs;
         h["lightmap_uvs"] = {{"width", u.width},         {"height", u.height},           {"meshes", u.meshes},
                              {"charts", u.charts},       {"texel_size", u.texelSize},    {"occupancy", u.occupancy},
-                             {"max_stretch", u.maxStretch}, {"mean_stretch", u.meanStretch}, {"seconds", u.seconds}};
+                             {"max_stretch", u.maxStretch}, {"mean_stretch", u.meanStretch}, {"seconds", u.seconds},
+                             {"grown_charts", u.grownCharts}, {"asked_texel_size", u.askedTexelSize},
+                             {"small_charts", json::array()}};
+        for (const SmallCharts& small : u.smallCharts)
+            h["lightmap_uvs"]["small_charts"].push_back({{"mesh", small.mesh}, {"charts", small.charts}});
     }
     h["lightmap"] = {{"width", stages.lightmap.width}, {"height", stages.lightmap.height}, {"atlases", json::array()}};
     for (const AtlasGroup& group : stages.lightmap.atlases) h["lightmap"]["atlases"].push_back(atlasJson(group));
@@ -156,6 +160,10 @@ VoxelState readVoxelState(const std::string& path) {
         uvs.maxStretch = u.at("max_stretch").get<double>();
         uvs.meanStretch = u.at("mean_stretch").get<double>();
         uvs.seconds = u.at("seconds").get<double>();
+        uvs.grownCharts = u.value("grown_charts", uvs.charts);
+        uvs.askedTexelSize = u.value("asked_texel_size", 0.0);
+        for (const json& small : u.value("small_charts", json::array()))
+            uvs.smallCharts.push_back({small.at("mesh").get<std::string>(), small.at("charts").get<size_t>()});
         r.lightmapUvs = uvs;
     }
     state.lightmap.width = h.at("lightmap").at("width").get<int>();
