@@ -343,6 +343,11 @@ Scene loadJobScene(const BakeJob& job) {
     options.strict = job.settings.strict;
     options.filesOutsideScene = job.settings.filesOutsideScene;
     Scene scene = loadGltf(job.scenePath, options);
+    if (job.settings.lambertMaterials)
+        for (Material& material : scene.materials) {
+            material.metallic = 0.0f;
+            material.transmission = 0.0f;
+        }
     addJobLightsAndCameras(job, scene);
     return scene;
 }

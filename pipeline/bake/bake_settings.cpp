@@ -107,6 +107,12 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
         {"bounce-gather-level", "voxels interpolate bounce light gathered once per surface side of each block of 2^n voxels (default 2)",
          [](S& s, const std::string& v) { s.bounceGatherLevel = parseIntSetting("bounce-gather-level", v, 0, kMaxCacheLevel); }},
         // Receivers
+        {"materials", "authored (as the glTF gives them) or lambert (every material diffuse, metallic 0 and no transmission, its base colour kept) (default authored)",
+         [](S& s, const std::string& v) {
+             if (v != "authored" && v != "lambert")
+                 throw SettingsError("setting materials = '" + v + "' is not one of authored, lambert");
+             s.lambertMaterials = v == "lambert";
+         }},
         {"lightmap-gather", "where lightmaps gather their indirect light: texels (records on the atlas's own texels) or points (the voxel gather points images use); texels needs gather-visibility rays (default texels)",
          [](S& s, const std::string& v) {
              if (v != "texels" && v != "points")
@@ -274,6 +280,7 @@ std::string describeBakeSettings(const BakeSettings& s) {
     if (s.device != cuda::DeviceChoice::Cpu) out << ", device=" << cuda::toString(s.device);
     if (s.lightmap.texelSize > 0.0) out << ", lightmap-texel=" << real(s.lightmap.texelSize);
     if (!s.generateLightmapUvs) out << ", lightmap-uvs=false";
+    if (s.lambertMaterials) out << ", materials=lambert";
     if (s.filesOutsideScene) out << ", files-outside-scene=true";
     if (!s.voxel.ownFrame) out << ", grid-frame=world";
     for (size_t g = 0; g < s.lightmap.atlases.size(); ++g) {

@@ -128,6 +128,10 @@ struct BakeSettings {
     BakeOutputs outputs;
     // TEXCOORD_1 for scenes that have none (unwrap/lightmap_uvs.h; bake.cpp needsLightmapUvs).
     bool generateLightmapUvs = true;
+    // Every material as Lambert (metallic 0, no transmission, its base colour), for the bake and
+    // for the references the bench and `voxlight reference` trace: the transport alone, without
+    // the light a diffuse lightmap cannot hold (a mirror's image, a glass's refraction).
+    bool lambertMaterials = false;
     bool strict = false;  // every warning is an error
     bool filesOutsideScene = false;  // read uris that leave the scene's folder (LoadOptions)
     bool quiet = false;   // no progress on stderr

@@ -100,6 +100,7 @@ void runCyclesPoint(const BenchOptions& options, const CyclesPeer& peer, BenchPo
             << " --sky-intensity " << s.skyIntensity;
         command += sky.str();
     }
+    if (s.lambertMaterials) command += " --lambert-all";
     if (!s.outputs.lightmaps) command += " --no-lightmap";
     if (!s.outputs.images) command += " --no-image";
     if (!options.base.addedLights.empty())

@@ -8,7 +8,7 @@
 #       [--sky R,G,B | --sky-image PATH [--sky-rotation DEG] [--sky-intensity S]
 #                                       [--sky-interpolation Linear|Closest]]
 #       [--sun DX,DY,DZ --sun-irradiance E [--sun-angle DEG] [--sun-color R,G,B]]
-#       [--one-sided-emitters]
+#       [--one-sided-emitters] [--lambert-all]
 #
 # Writes DIR/lightmap.exr, DIR/lightmap_direct.exr, DIR/image.exr (linear float) and
 # DIR/cycles.json (seconds of each bake and render, peak memory). Settings as the Cycles
@@ -53,6 +53,8 @@
 #                 Checked (tests/reference/classroom/README.md): open quads facing +Y, +X, +Z,
 #                 -X under suns along (0,-1,0) and (-0.7,-0.55,-0.45) bake E max(0, n.-d) R/pi
 #                 per channel within 2e-5 on average (0.53 degree disk, 16 spp).
+# --lambert-all   metallic and transmissive materials become Lambert too (their base colour),
+#                 as voxlight's `materials lambert` makes them: the transport alone.
 # --one-sided-emitters  emissive materials that glTF marks single-sided (no doubleSided:
 #                 Blender's importer sets use_backface_culling) emit from their front face
 #                 only, as glTF's culling and voxlight's emitters do; Cycles' emission is
@@ -110,6 +112,7 @@ def parse_args():
     p.add_argument("--sun-angle", type=float, default=0.0, metavar="DEG")
     p.add_argument("--sun-color", type=rgb, default=(1.0, 1.0, 1.0), metavar="R,G,B")
     p.add_argument("--one-sided-emitters", action="store_true")
+    p.add_argument("--lambert-all", action="store_true")
     args = p.parse_args(argv)
     if args.sun is None and (args.sun_irradiance is not None or args.sun_angle != 0.0
                              or args.sun_color != (1.0, 1.0, 1.0)):
@@ -266,7 +269,7 @@ def emits(material):
     return False
 
 
-def make_lambert(material):
+def make_lambert(material, every=False):
     if material is None or not material.use_nodes or emits(material):
         return False
     nodes, links = material.node_tree.nodes, material.node_tree.links
@@ -274,9 +277,9 @@ def make_lambert(material):
     output = next((n for n in nodes if n.type == "OUTPUT_MATERIAL"), None)
     if principled is None or output is None:
         return False
-    if principled.inputs["Metallic"].is_linked or principled.inputs["Metallic"].default_value > 0.0:
+    if not every and (principled.inputs["Metallic"].is_linked or principled.inputs["Metallic"].default_value > 0.0):
         return False
-    if principled.inputs["Transmission"].is_linked or principled.inputs["Transmission"].default_value > 0.0:
+    if not every and (principled.inputs["Transmission"].is_linked or principled.inputs["Transmission"].default_value > 0.0):
         return False
     diffuse = nodes.new("ShaderNodeBsdfDiffuse")
     diffuse.inputs["Roughness"].default_value = 0.0
@@ -376,7 +379,7 @@ def main():
     timings["import_seconds"] = time.perf_counter() - start
     scene = bpy.context.scene
     configure(scene, args)
-    timings["lambert_materials"] = sorted(m.name for m in bpy.data.materials if make_lambert(m))
+    timings["lambert_materials"] = sorted(m.name for m in bpy.data.materials if make_lambert(m, args.lambert_all))
     if args.one_sided_emitters:
         timings["one_sided_emitters"] = sorted(m.name for m in bpy.data.materials if make_one_sided_emitter(m))
     if args.sun is not None:
