@@ -453,9 +453,12 @@ ReceiverLighting ReceiverShading::shadeAtlasRows(const LightmapAtlas& atlas, int
             }
     } else if (texelGather()) {
         // Lights and emitters per sample; the sky and the indirect light from the atlas's own
-        // records (bake/texel_gather.h).
+        // records (bake/texel_gather.h). An image sky's sun casts shadows as sharp as a light's,
+        // which the records' lattice and filter would blur (the Cornell box under the afternoon
+        // sky, docs/accuracy.md): it stays per sample.
+        const bool skyInRecords = !tracing_.traceScene.view().sky.hasImage();
         DirectLightSettings direct = settings_.direct;
-        direct.skyAtSamples = false;
+        direct.skyAtSamples = !skyInRecords;
         lit = shadeReceivers(receivers, tracing_.traceScene.view(), tracing_.bvh.view(), nullptr, nullptr,
                              settings_.cone, direct, true, &progress, first, last);
         progress.finish();
@@ -464,7 +467,10 @@ ReceiverLighting ReceiverShading::shadeAtlasRows(const LightmapAtlas& atlas, int
         texels.raysPerAxis = settings_.gatherRays;
         texels.brightSamples = settings_.brightPatches.samples;
         texels.skyDrawsPerAxis = settings_.direct.skyStrata;
+        texels.filterPasses = settings_.lightmapFilterPasses;
         texels.direct = direct;
+        texels.direct.skyAtSamples = false;
+        texels.gatherSky = skyInRecords;
         const TexelGather gathered = gatherAtlasTexels(atlas, rowBegin, rowEnd, &lit.direct, mipView_, bright_.restFaces,
                                                        bright_, tracing_.bvh.view(), tracing_.traceScene.view(), texels);
         for (size_t k = 0; k < lit.direct.pixels.size(); ++k) lit.direct.pixels[k] += gathered.sky.pixels[k];

@@ -121,6 +121,8 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          }},
         {"texel-gather-spacing", "texels between a lightmap's gather records; 0: about 1.5 voxels (default 0)",
          [](S& s, const std::string& v) { s.texelGatherSpacing = parseIntSetting("texel-gather-spacing", v, 0, 64); }},
+        {"lightmap-filter", "passes of the edge-stopping filter over a lightmap's gather records, each twice as wide (records one surface holds, whose difference their noise explains, are averaged); 0: off (default 3)",
+         [](S& s, const std::string& v) { s.lightmapFilterPasses = parseIntSetting("lightmap-filter", v, 0, 5); }},
         {"lightmap-res", "lightmap atlas width and height in texels, exactly (generated UVs get the texel size that fits them); auto: the bake sizes each atlas, the smallest power-of-two square that holds it at texels of half a voxel or finer, up to 4096 (default 256)",
          [](S& s, const std::string& v) {
              if (v == "auto") {
@@ -266,7 +268,8 @@ std::string describeBakeSettings(const BakeSettings& s) {
         << ", gather-visibility=" << toString(s.gatherVisibility) << ", gather-rays=" << s.gatherRays
         << ", bounce-rays=" << s.bounceRays << ", bounce-gather-level=" << s.bounceGatherLevel
         << ", lightmap-gather=" << (s.lightmapGather == LightmapGather::Texels ? "texels" : "points")
-        << ", texel-gather-spacing=" << s.texelGatherSpacing << ", lightmap-res="
+        << ", texel-gather-spacing=" << s.texelGatherSpacing << ", lightmap-filter=" << s.lightmapFilterPasses
+        << ", lightmap-res="
         << (s.lightmap.autoResolution ? std::string("auto") : std::to_string(s.lightmap.width))
         << ", lightmap-subsamples=" << s.lightmap.subsamplesPerAxis << ", emitter-strata=" << s.direct.emitterStrata
         << ", width=" << s.imageWidth << ", height=" << s.imageHeight;

@@ -111,6 +111,7 @@ struct BakeSettings {
     // cushion) took its light in blocks (docs/accuracy.md). texelGatherSpacing 0: automatic.
     LightmapGather lightmapGather = LightmapGather::Texels;
     int texelGatherSpacing = 0;
+    int lightmapFilterPasses = 3;  // the texel records' edge-stopping filter (bake/texel_gather.h); 0: off
     int gatherRays = 14;
     int bounceRays = 14;
     LightmapSettings lightmap;

@@ -61,6 +61,16 @@ VL_HOSTDEV inline vec3 fanDirection(int i, int j, int n) {
     return vec3(azimuth / length * glm::sin(elevation), glm::cos(elevation));
 }
 
+// Ray (i, j) of an n × n fan about +Z at the point `jitter` ∈ [0, 1)² of its stratum, mapped to
+// the cosine-weighted hemisphere: with one jitter per fan, uniform over the fans, each ray is
+// uniform in its stratum, so the fan's estimate is unbiased. The fixed rays above are a
+// quadrature: a small bright source (a sun in a sky image) falls in or between the same rings
+// of elevation at every point of a floor, and a floor's mean was 1.2% off that way.
+VL_HOSTDEV inline vec3 fanDirectionJittered(int i, int j, int n, const vec2& jitter) {
+    const vec2 d = sampleConcentricDisk(vec2((float(i) + jitter.x) / float(n), (float(j) + jitter.y) / float(n)));
+    return vec3(d, glm::sqrt(glm::max(0.0f, 1.0f - glm::dot(d, d))));
+}
+
 // A fan direction about +Z laid out in `frame`.
 VL_HOSTDEV inline vec3 inFrame(const FanFrame& frame, const vec3& d) {
     return glm::normalize(d.x * frame.tangent + d.y * frame.bitangent + d.z * frame.normal);

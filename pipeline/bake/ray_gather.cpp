@@ -80,10 +80,12 @@ std::vector<vec3> fanPattern(int n) {
 // onEscape(ray) for each that leaves the scene.
 template <typename OnEscape, typename OnHit>
 void traceFan(const RayFan& fan, const std::vector<vec3>& pattern, const BvhView& bvh, OnEscape&& onEscape, OnHit&& onHit) {
-    for (const vec3& d : pattern) {
+    const bool jittered = fan.jitter.x >= 0.0f;
+    const int n = jittered ? int(std::lround(std::sqrt(double(pattern.size())))) : 0;
+    for (size_t k = 0; k < pattern.size(); ++k) {
         Ray ray;
         ray.origin = fan.origin;
-        ray.direction = inFrame(fan.frame, d);
+        ray.direction = inFrame(fan.frame, jittered ? fanDirectionJittered(int(k) / n, int(k) % n, n, fan.jitter) : pattern[k]);
         Hit hit;
         if (intersectClosest(bvh, ray, hit))
             onHit(ray, hit);
@@ -191,7 +193,7 @@ std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& m
     const std::vector<vec3> pattern = fanPattern(raysPerAxis);
     const float rays = float(pattern.size());
     const HitLookup level0 = hitLookup(mips.levels[0], faces.size());
-    const bool sky = extras && scene.sky.present();
+    const bool sky = extras && extras->readSky && scene.sky.present();
     const float imageDraws = scene.sky.samplable() ? float(skyDrawsPerAxis * skyDrawsPerAxis) : 0.0f;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, fans.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
         IndexLeafCache leaves;
@@ -237,7 +239,7 @@ std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& m
                 extras->escaped[q] = escaped;
                 if (sky && scene.sky.samplable() && skyDrawsPerAxis > 0)
                     open += skyImageDrawsIrradiance(scene, bvh, fans[q].origin, fans[q].frame.normal, fans[q].frame.normal,
-                                                    skyDrawsPerAxis, rays, q);
+                                                    skyDrawsPerAxis, rays, fans[q].seed);
                 extras->sky[q] = isFinite(open) ? open : vec3(0.0f);
             }
         }
@@ -251,7 +253,10 @@ std::vector<vec3> gatherByRays(const std::vector<GatherPoint>& points, const Mip
                                int raysPerAxis, Progress* progress) {
     std::vector<FanStart> fans(points.size());
     const float h = mips.voxelSize;
-    tbb::parallel_for(size_t(0), points.size(), [&](size_t q) { fans[q] = rayFan(points[q], h, bvh, scene); });
+    tbb::parallel_for(size_t(0), points.size(), [&](size_t q) {
+        fans[q] = rayFan(points[q], h, bvh, scene);
+        fans[q].seed = q;
+    });
     return gatherFans(fans, mips, faces, bvh, scene, raysPerAxis, progress);
 }
 

@@ -78,6 +78,8 @@ std::vector<vec3> gatherByRays(const std::vector<GatherPoint>& points, const Mip
 struct FanStart {
     vec3 origin{0.0f};
     FanFrame frame{};
+    uint64_t seed = 0;  // the image sky's draws: a fan's own, so its light does not depend on the fans beside it
+    vec2 jitter{-1.0f};  // ≥ 0: its rays at this point of their strata (fan_rays.h fanDirectionJittered); else the fixed fan
 };
 
 // What a fan's rays found besides the light they read: the sky's irradiance through the rays
@@ -86,6 +88,7 @@ struct FanStart {
 // lighting/direct_light.h skyShare), the variance of the estimate of the irradiance both give
 // (mean channel), from the spread of the rays' radiance, and the rays that left the scene.
 struct FanExtras {
+    bool readSky = true;  // set by the caller: false leaves the sky out of `sky` and `variance`
     std::vector<vec3> sky;
     std::vector<float> variance;
     std::vector<uint32_t> escaped;

@@ -3,6 +3,7 @@
 #include "bake/fan_rays.h"
 #include "bake/ray_gather.h"
 #include "bake/shade_element.h"
+#include "core/rng.h"
 #include "trace/ray_offset.h"
 
 #include <tbb/parallel_for.h>
@@ -94,8 +95,12 @@ void gatherRecords(std::vector<Record>& records, size_t first, int width, const 
                             double(r.texel / size_t(width)) * 0.5698402909980532;
         fans[k].origin = offsetRayOrigin(r.sample.position, r.ng, bvh.extent);
         fans[k].frame = fanFrame(r.sample.normal, tangent, float(turn - std::floor(turn)));
+        fans[k].seed = r.seed;
+        Pcg32 rng(r.seed, 0x7e7e1);
+        rng.next2D(fans[k].jitter.x, fans[k].jitter.y);
     });
     FanExtras extras;
+    extras.readSky = settings.gatherSky;
     const std::vector<vec3> gathered =
         gatherFans(fans, mips, faces, bvh, scene, settings.raysPerAxis, nullptr, &extras, settings.skyDrawsPerAxis);
     tbb::parallel_for(size_t(0), count, [&](size_t k) {

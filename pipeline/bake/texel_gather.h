@@ -36,6 +36,7 @@ struct TexelGatherSettings {
     int raysPerAxis = 14;    // each record's n × n fan
     int brightSamples = 64;  // the bright patches' shadow rays per record
     int filterPasses = 3;    // the edge-stopping filter's passes over the lattice (steps 1, 2, 4 …); 0: none
+    bool gatherSky = true;     // the records gather the sky's direct light; false: the caller lights samples by it
     int skyDrawsPerAxis = 10;  // under an image sky, draws from its image per record (n × n)
     DirectLightSettings direct;  // the direct light that tells a record is open (lights, emitters: no sky)
 };
