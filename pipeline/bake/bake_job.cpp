@@ -1,5 +1,6 @@
 #include "bake/bake_job.h"
 
+#include "bake/output_names.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -141,7 +142,7 @@ void publish(const fs::path& staging, const fs::path& target) {
 // the same folder is refused, naming the first's process.
 class OutputLock {
 public:
-    explicit OutputLock(const fs::path& target) : path_(target.string() + ".lock") {
+    explicit OutputLock(const fs::path& target) : path_(target.string() + kLockSuffix) {
         if (!target.parent_path().empty()) fs::create_directories(target.parent_path());
         // The holder removes the file when it ends: a lock taken on a file already removed
         // (opened just before) is taken again on the file now there.
@@ -183,7 +184,7 @@ private:
 // live bake owns one.
 void removeDeadStaging(const fs::path& target) {
     const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-    const std::string prefix = target.filename().string() + ".partial-";
+    const std::string prefix = target.filename().string() + kStagingInfix;
     std::error_code ec;
     for (const auto& entry : fs::directory_iterator(parent, ec))
         if (entry.path().filename().string().rfind(prefix, 0) == 0) fs::remove_all(entry.path(), ec);
@@ -286,7 +287,7 @@ BakeReport publishBake(const BakeJob& job, const std::function<void(BakeReport&,
     report.scenePath = job.scenePath;
     report.outputDir = job.outputDir;
     const fs::path target(job.outputDir);
-    const fs::path staging = target.parent_path() / (target.filename().string() + ".partial-" + std::to_string(getpid()));
+    const fs::path staging = target.parent_path() / (target.filename().string() + kStagingInfix + std::to_string(getpid()));
     try {
         const OutputLock lock(target);
         removeDeadStaging(target);

@@ -8,7 +8,7 @@
 //   "sky": { "radiance": [0.6, 0.75, 1.0] },  // a uniform sky, W/(m²·sr), for all (the `sky` setting)
 //   "scenes": [
 //     { "path": "scenes/cornell_box.gltf" },
-//     { "path": "level.glb", "name": "level", "output": "out/level",
+//     { "path": "level.glb", "name": "level",   // its folder in "output"; or "output": "levels/e1m1"
 //       "settings": { "cones": 32, "images": false }, "sky": { "radiance": 0 },  // replaces the global sky
 //       "atlases": [ { "name": "props", "meshes": ["Chair"], "resolution": [512, 256] } ],  // replaces the global list
 //       "lights": [ { "name": "lamp", "type": "point", "position": [1, 2, 3],
@@ -17,6 +17,15 @@
 //                      "up": [0, 1, 0], "yfov": 0.8 } ] }            // radians; up defaults to +Y
 //   ]
 // }
+//
+// Every key of every object is one of those above (a light also takes "direction", "range",
+// "angle", "innerConeAngle", "outerConeAngle", each for the types it belongs to; "settings"
+// takes the bake settings): another is refused, naming the file, the place and the closest
+// known key. A scene bakes
+// into <output>/<name> (name: its file's stem by default) or into its "output", a relative
+// path inside the job's output folder; a name is one folder's name (no "/", "\", "..",
+// control characters, nor a name of output_names.h), and each scene's folder, links resolved,
+// lies inside the output folder, neither another scene's nor inside or around one.
 #pragma once
 
 #include "bake/bake_job.h"
@@ -27,7 +36,8 @@
 namespace vl {
 
 // `defaults` are the command line's settings; the file's global and per-scene settings
-// apply on top, in that order. InputError / SettingsError name the file and the scene.
+// apply on top, in that order. InputError / SettingsError name the file and the scene. It
+// reads only: a refused job file leaves nothing written.
 std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& defaults,
                                  const std::string& defaultOutputRoot);
 

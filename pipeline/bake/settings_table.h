@@ -28,17 +28,40 @@ bool parseBoolSetting(const std::string& name, const std::string& value);
 // One of `choices`; returns its index.
 int parseChoiceSetting(const std::string& name, const std::string& value, const std::vector<std::string>& choices);
 
-// Applies one named setting; an unknown name is a SettingsError listing the known ones.
+// The name in `known` closest to `name` by edit distance (letter case aside, a swap of two
+// neighbours one edit), when it is close enough to be what was meant; "" when none is.
+std::string closestName(const std::string& name, const std::vector<std::string>& known);
+
+template <typename Settings>
+std::vector<std::string> settingNames(const SettingsTable<Settings>& table) {
+    std::vector<std::string> names;
+    for (const auto& spec : table) names.push_back(spec.name);
+    return names;
+}
+
+// The setting of that name; nullptr when the table has none. Every reader of setting names
+// (flags, job files, bench specs) looks them up here.
+template <typename Settings>
+const SettingSpec<Settings>* findSetting(const SettingsTable<Settings>& table, const std::string& name) {
+    for (const auto& spec : table)
+        if (spec.name == name) return &spec;
+    return nullptr;
+}
+
+// Applies one named setting; an unknown name is a SettingsError with the closest known one,
+// or the list of them when none is close.
 template <typename Settings>
 void applySetting(const SettingsTable<Settings>& table, Settings& settings, const std::string& name,
                   const std::string& value) {
-    for (const auto& spec : table)
-        if (spec.name == name) {
-            spec.apply(settings, value);
-            return;
-        }
+    if (const SettingSpec<Settings>* spec = findSetting(table, name)) {
+        spec->apply(settings, value);
+        return;
+    }
+    const std::vector<std::string> names = settingNames(table);
+    const std::string closest = closestName(name, names);
+    if (!closest.empty()) throw SettingsError("unknown setting '" + name + "' (did you mean '" + closest + "'?)");
     std::string known;
-    for (const auto& spec : table) known += (known.empty() ? "" : ", ") + spec.name;
+    for (const std::string& n : names) known += (known.empty() ? "" : ", ") + n;
     throw SettingsError("unknown setting '" + name + "' (known: " + known + ")");
 }
 

@@ -1,5 +1,6 @@
 #include "cluster/plan.h"
 
+#include "bake/output_names.h"
 #include "core/error.h"
 #include "scene/gltf_loader.h"
 
@@ -52,7 +53,7 @@ std::vector<fs::path> referencedFiles(const std::string& scenePath) {
 }  // namespace
 
 std::string workFolder(const std::string& outputRoot) {
-    return (fs::absolute(outputRoot) / ".voxlight-slurm").lexically_normal().string();
+    return (fs::absolute(outputRoot) / kClusterWorkFolder).lexically_normal().string();
 }
 
 std::string sceneWorkFolder(const std::string& workDir, size_t scene) {

@@ -3,6 +3,7 @@
 #include "bake/bake.h"
 #include "bake/bake_job.h"
 #include "bake/job_file.h"
+#include "bake/settings_table.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "export/lightmap_encoding.h"
@@ -19,6 +20,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -708,6 +710,272 @@ TEST_CASE("Job files group meshes into atlases globally and per scene", "[bake]"
         const std::string file = "refused" + std::to_string(i) + ".json";
         CHECK_THAT(jobFileError<SettingsError>(dir / file, sceneWithAtlases(badValues[i].first)), at(file, badValues[i].second));
     }
+}
+
+TEST_CASE("Job files refuse every key they do not know, naming the file, the place and the closest key", "[bake]") {
+    const fs::path dir = tempDir("job-unknown-keys");
+    const fs::path path = dir / "job.json";
+    const std::string file = path.string();
+    // The two a new user met, once baked without complaint (and without a sky).
+    CHECK(jobFileError<InputError>(path, R"({"lihgts": [], "scenes": [{"path": "a.gltf"}]})") ==
+          file + R"(: unknown key "lihgts" at the top level (did you mean "lights"? "lights" is a key of each scene: it goes in a scene of "scenes"))");
+    CHECK(jobFileError<InputError>(path, R"({"scenes": [{"path": "a.gltf", "skyy": {"radiance": 1}}]})") ==
+          file + R"(: scenes[0]: unknown key "skyy" (did you mean "sky"?))");
+
+    // Every object the reader takes: the top level, a scene, its settings (the bake settings
+    // table), sky, atlas groups, lights and cameras, globally and per scene where both are.
+    const auto inScene = [](const std::string& fields) {
+        return R"({"scenes": [{"path": "a.gltf"}, {"path": "b.gltf", )" + fields + "}]}";
+    };
+    const std::vector<std::pair<std::string, std::string>> inputErrors = {
+        {R"({"scene": [{"path": "a.gltf"}]})", R"(: unknown key "scene" at the top level (did you mean "scenes"?))"},
+        {R"({"outptu": "out", "scenes": [{"path": "a.gltf"}]})",
+         R"(: unknown key "outptu" at the top level (did you mean "output"?))"},
+        {R"({"cones": 6, "scenes": [{"path": "a.gltf"}]})",
+         R"(: unknown key "cones" at the top level ("cones" is a bake setting: it goes in "settings"))"},
+        {R"({"lights": [], "scenes": [{"path": "a.gltf"}]})",
+         R"(: unknown key "lights" at the top level ("lights" is a key of each scene: it goes in a scene of "scenes"))"},
+        {R"({"version": 2, "scenes": [{"path": "a.gltf"}]})",
+         R"(: unknown key "version" at the top level (known: output, settings, atlases, sky, scenes))"},
+        {inScene(R"("lihgts": [])"), R"(: scenes[1]: unknown key "lihgts" (did you mean "lights"?))"},
+        {inScene(R"("cones": 6)"), R"(: scenes[1]: unknown key "cones" ("cones" is a bake setting: it goes in "settings"))"},
+        {inScene(R"("lightmap_res": 512)"),
+         R"(: scenes[1]: unknown key "lightmap_res" (did you mean "lightmap-res"? "lightmap-res" is a bake setting: it goes in "settings"))"},
+        {R"({"sky": {"radience": 1}, "scenes": [{"path": "a.gltf"}]})", R"(: sky: unknown key "radience" (did you mean "radiance"?))"},
+        {inScene(R"("sky": {"radiance": 1, "colour": "blue"})"),
+         R"(: scenes[1].sky: unknown key "colour" (known: radiance, image, rotation, intensity))"},
+        {R"({"atlases": [{"name": "walls", "mesh": ["Floor"]}], "scenes": [{"path": "a.gltf"}]})",
+         R"(: atlases[0]: unknown key "mesh" (did you mean "meshes"?))"},
+        {inScene(R"("atlases": [{"name": "walls", "meshes": ["Floor"], "res": 512}])"),
+         R"(: scenes[1].atlases[0]: unknown key "res" (known: name, meshes, resolution))"},
+        {inScene(R"("lights": [{"type": "point", "position": [0, 1, 0]}, {"type": "point", "position": [0, 1, 0], "colour": [1, 1, 1]}])"),
+         R"(: scenes[1].lights[1]: unknown key "colour" (did you mean "color"?))"},
+        {inScene(R"("lights": [{"type": "spot", "position": [0, 1, 0], "direction": [0, -1, 0], "innerConeAngel": 0.1}])"),
+         R"(: scenes[1].lights[0]: unknown key "innerConeAngel" (did you mean "innerConeAngle"?))"},
+        {inScene(R"("cameras": [{"position": [0, 0, 0], "target": [0, 0, 1], "fov": 1}])"),
+         R"(: scenes[1].cameras[0]: unknown key "fov" (did you mean "yfov"?))"},
+        // A key of another type's light is read by none: refused, not left out.
+        {inScene(R"("lights": [{"position": [0, 1, 0], "direction": [0, -1, 0]}])"),
+         R"(: scenes[1].lights[0]: "direction" is for spot and directional lights, not a point light (the default: give a "type"))"},
+        {inScene(R"("lights": [{"type": "directional", "direction": [0, -1, 0], "position": [0, 1, 0]}])"),
+         R"(: scenes[1].lights[0]: "position" is for point and spot lights, not a directional light)"},
+        {inScene(R"("lights": [{"type": "point", "position": [0, 1, 0], "outerConeAngle": 0.5}])"),
+         R"(: scenes[1].lights[0]: "outerConeAngle" is for spot lights, not a point light)"},
+    };
+    for (const auto& [text, message] : inputErrors) {
+        INFO(text);
+        CHECK(jobFileError<InputError>(path, text) == file + message);
+    }
+    // In "settings" the keys are the bake settings, looked up in their one table.
+    const std::vector<std::pair<std::string, std::string>> settingsErrors = {
+        {inScene(R"("settings": {"cone": 6})"), R"(: scenes[1].settings: unknown key "cone" (did you mean "cones"?))"},
+        {R"({"settings": {"lightmap_res": 512}, "scenes": [{"path": "a.gltf"}]})",
+         R"(: settings: unknown key "lightmap_res" (did you mean "lightmap-res"?))"},
+        {R"({"settings": {"lights": []}, "scenes": [{"path": "a.gltf"}]})",
+         R"(: settings: unknown key "lights" ("lights" is a key of each scene: it goes in a scene of "scenes"))"},
+        {inScene(R"("settings": {"atlases": []})"),
+         R"(: scenes[1].settings: unknown key "atlases" ("atlases" is a job-file key, not a bake setting: it goes beside "settings"))"},
+    };
+    for (const auto& [text, message] : settingsErrors) {
+        INFO(text);
+        CHECK(jobFileError<SettingsError>(path, text) == file + message);
+    }
+    // Flags and bench specs share the lookup and its suggestion.
+    BakeSettings settings;
+    CHECK_THROWS_WITH(applySetting(bakeSettingsTable(), settings, "cone", "6"),
+                      "unknown setting 'cone' (did you mean 'cones'?)");
+    CHECK(closestName("Sky", {"output", "sky"}) == "sky");
+    CHECK(closestName("colour", {"name", "color"}) == "color");
+    CHECK(closestName("brightness", {"name", "color", "intensity"}).empty());
+
+    // A job using every key still reads, each where it belongs.
+    std::ofstream(path) << R"({"output": "out", "settings": {"cones": 6}, "sky": {"radiance": 0.5},
+        "atlases": [{"name": "walls", "meshes": ["Floor"], "resolution": 64}],
+        "scenes": [{"path": "a.gltf", "name": "first", "settings": {"images": false},
+                    "sky": {"image": "noon.exr", "rotation": 30, "intensity": 2},
+                    "atlases": [{"name": "props", "meshes": ["Chair"]}],
+                    "lights": [{"name": "lamp", "type": "point", "color": [1, 1, 1], "intensity": 5, "range": 4, "position": [0, 1, 0]},
+                               {"type": "spot", "position": [0, 2, 0], "direction": [0, -1, 0], "innerConeAngle": 0.2, "outerConeAngle": 0.6},
+                               {"type": "directional", "direction": [0, -1, 0], "angle": 0.53}],
+                    "cameras": [{"name": "hall", "position": [0, 1, 4], "target": [0, 1, 0], "up": [0, 1, 0], "yfov": 0.8}]},
+                   {"path": "b.gltf", "output": "levels/b"}]})";
+    const std::vector<BakeJob> jobs = readJobFile(file, BakeSettings{}, "output");
+    REQUIRE(jobs.size() == 2);
+    CHECK(jobs[0].outputDir == (dir / "out" / "first").string());
+    CHECK(jobs[0].addedLights.size() == 3);
+    CHECK(jobs[0].addedCameras.size() == 1);
+    CHECK(jobs[1].outputDir == (dir / "out" / "levels" / "b").string());
+}
+
+TEST_CASE("A job file's scene name is one folder's name, and each scene's bake stays inside the output folder", "[bake]") {
+    const fs::path dir = tempDir("job-scene-folders");
+    const fs::path path = dir / "job.json";
+    const std::string file = path.string();
+    const auto job = [](const std::string& fields) {
+        return R"({"output": "out", "scenes": [{"path": "a.gltf"}, {"path": "b.gltf", )" + fields + "}]}";
+    };
+    // The new user's name, whose bake once landed two folders above the output folder.
+    CHECK(jobFileError<InputError>(path, job(R"("name": "../../escaped")")) ==
+          file + R"(: scenes[1]: "name": "../../escaped" is not a folder name (it holds "/"): a scene bakes into the folder of its name, inside the job's output folder)");
+    const std::vector<std::pair<std::string, std::string>> names = {
+        {R"("..")", R"(".." leads out of the output folder)"},
+        {R"(".")", R"("." is the output folder itself)"},
+        {R"("")", "it is empty"},
+        {R"("levels/e1m1")", R"(it holds "/")"},
+        {R"("/tmp")", R"(it holds "/")"},
+        {R"("..\\escaped")", R"(it holds "\")"},
+        {R"("C:\\bakes")", R"(it holds "\")"},
+        {R"("tab\there")", "it holds a control character"},
+        {R"("line\nbreak")", "it holds a control character"},
+        {R"("bell\u0007")", "it holds a control character"},
+        {R"("nul\u0000")", "it holds a control character"},
+        {R"("del\u007f")", "it holds a control character"},
+        // What voxlight writes beside a scene's folder, and a cluster bake's work folder.
+        {R"("a.lock")", R"(a bake of <folder> is locked with "<folder>.lock")"},
+        {R"("a.partial-4242")", R"(a bake of <folder> is staged in "<folder>.partial-…")"},
+        {R"(".voxlight-slurm")", R"(a cluster bake keeps its work in ".voxlight-slurm")"},
+    };
+    for (const auto& [name, fault] : names) {
+        INFO(name);
+        CHECK(jobFileError<InputError>(path, job(R"("name": )" + name)) ==
+              file + ": scenes[1]: \"name\": " + nlohmann::json::parse(name).dump() + " is not a folder name (" + fault +
+                  "): a scene bakes into the folder of its name, inside the job's output folder");
+    }
+    CHECK(jobFileError<InputError>(path, job(R"("name": 7)")) ==
+          file + R"(: scenes[1]: "name" must be a string, the name of the folder the scene bakes into)");
+    // A name taken from the scene's file is held to the same.
+    CHECK(jobFileError<InputError>(path, R"({"scenes": [{"path": "/tmp/.."}]})") ==
+          file + R"(: scenes[0]: its path gives the folder name "..", which is not one (".." leads out of the output folder): give the scene a "name")");
+    CHECK(jobFileError<InputError>(path, R"({"scenes": [{"path": "levels/"}]})") ==
+          file + R"(: scenes[0]: its path gives the folder name "", which is not one (it is empty): give the scene a "name")");
+
+    // A scene's "output" is a relative path inside the output folder.
+    const std::vector<std::pair<std::string, std::string>> outputs = {
+        {R"("../x")", R"(".." leads out of it)"},
+        {R"("levels/../../x")", R"(".." leads out of it)"},
+        {R"("/tmp/x")", "it is an absolute path"},
+        {R"("levels\\x")", R"(it holds "\")"},
+        {R"("levels//x")", R"(it has an empty or "." part)"},
+        {R"("")", "it is empty"},
+        {R"("a\u0001")", "it holds a control character"},
+        {"5", "not a string"},
+        {R"(".voxlight-slurm/b")", R"(a cluster bake keeps its work in ".voxlight-slurm")"},
+        {R"("levels/b.lock")", R"(a bake of <folder> is locked with "<folder>.lock")"},
+    };
+    for (const auto& [output, fault] : outputs) {
+        INFO(output);
+        CHECK(jobFileError<InputError>(path, job(R"("output": )" + output)) ==
+              file + ": scenes[1]: \"output\": " + nlohmann::json::parse(output).dump() +
+                  " is not a folder inside the job's output folder (" + fault + ")");
+    }
+    CHECK(jobFileError<InputError>(path, job(R"("name": "b", "output": "levels/b")")) ==
+          file + R"(: scenes[1]: "name" and "output" both give the scene's folder: keep one)");
+
+    // Two scenes never share a folder (the second would overwrite the first).
+    CHECK(jobFileError<InputError>(path, R"({"scenes": [{"path": "a.gltf"}, {"path": "sub/a.gltf"}]})") ==
+          file + R"(: scenes[1]: bakes into output/a, as scenes[0] does: give one of them another "name")");
+    CHECK(jobFileError<InputError>(path, job(R"("output": "a/")")) ==
+          file + ": scenes[1]: bakes into " + (dir / "out" / "a").string() + ", as scenes[0] does: give one of them another \"name\"");
+    // Nor one inside another's: their files would mix.
+    CHECK(jobFileError<InputError>(path, job(R"("output": "a/b")")) ==
+          file + ": scenes[1]: its folder " + (dir / "out" / "a" / "b").string() + " and the folder of scenes[0], " +
+              (dir / "out" / "a").string() + ", lie one inside the other: keep them apart");
+    CHECK(jobFileError<InputError>(path, R"({"output": "out", "scenes": [{"path": "a.gltf", "output": "levels/a"},
+                                                                         {"path": "levels.gltf"}]})") ==
+          file + ": scenes[1]: its folder " + (dir / "out" / "levels").string() + " and the folder of scenes[0], " +
+              (dir / "out" / "levels" / "a").string() + ", lie one inside the other: keep them apart");
+    // Names that only look alike are apart.
+    std::ofstream(path) << R"({"output": "out", "scenes": [{"path": "a.gltf"}, {"path": "b.gltf", "name": "ab"},
+                                                            {"path": "c.gltf", "output": "a-levels/c"}, {"path": "a.lock.d.gltf"}]})";
+    CHECK(readJobFile(file, BakeSettings{}, "output").size() == 4);
+
+    // Links resolved: a folder that leads out through a link is refused; an output folder
+    // that is itself a link holds its scenes.
+    fs::remove_all(dir / "out");
+    fs::remove_all(dir / "elsewhere");
+    fs::create_directories(dir / "out");
+    fs::create_directories(dir / "elsewhere");
+    fs::create_directory_symlink(dir / "elsewhere", dir / "out" / "link");
+    const fs::path root = fs::weakly_canonical(dir / "out");
+    CHECK(jobFileError<InputError>(path, job(R"("name": "link")")) ==
+          file + ": scenes[1]: its folder " + (dir / "out" / "link").string() + " resolves to " +
+              fs::weakly_canonical(dir / "elsewhere").string() + ", outside the job's output folder " + root.string());
+    CHECK(jobFileError<InputError>(path, job(R"("output": "link/b")")) ==
+          file + ": scenes[1]: its folder " + (dir / "out" / "link" / "b").string() + " resolves to " +
+              (fs::weakly_canonical(dir / "elsewhere") / "b").string() + ", outside the job's output folder " + root.string());
+    fs::remove(dir / "linked-out");
+    fs::create_directory_symlink(dir / "out", dir / "linked-out");
+    std::ofstream(path) << R"({"output": "linked-out", "scenes": [{"path": "a.gltf"}, {"path": "b.gltf", "output": "levels/b"}]})";
+    const std::vector<BakeJob> jobs = readJobFile(file, BakeSettings{}, "output");
+    REQUIRE(jobs.size() == 2);
+    CHECK(jobs[0].outputDir == (dir / "linked-out" / "a").string());
+    CHECK(jobs[1].outputDir == (dir / "linked-out" / "levels" / "b").string());
+    CHECK_FALSE(fs::exists(dir / "out" / "a"));  // read, nothing written
+}
+
+TEST_CASE("Every job file in the repository and in ../shared reads", "[bake]") {
+    std::vector<fs::path> roots = {sourceDir() + "/scenes", sourceDir() + "/tools/bench", sourceDir() + "/tests"};
+    if (haveShared()) roots.push_back(sharedDir() + "/scenes");
+    size_t read = 0;
+    for (const fs::path& root : roots)
+        for (const auto& entry : fs::recursive_directory_iterator(root, fs::directory_options::skip_permission_denied)) {
+            if (!entry.is_regular_file() || entry.path().extension() != ".json") continue;
+            // A job file: an object whose "scenes" are objects with a "path".
+            std::ifstream in(entry.path());
+            const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+            if (!j.is_object() || !j.contains("scenes") || !j["scenes"].is_array() || j["scenes"].empty()) continue;
+            const nlohmann::json& scenes = j["scenes"];
+            if (!std::all_of(scenes.begin(), scenes.end(), [](const nlohmann::json& s) { return s.is_object() && s.contains("path"); }))
+                continue;
+            INFO(entry.path().string());
+            CHECK_NOTHROW(readJobFile(entry.path().string(), BakeSettings{}, tempDir("job-files-read")));
+            ++read;
+        }
+    CHECK(read >= 4);  // scenes/classroom.json, tools/bench/zdm2.json and library20.json, the classroom reference
+}
+
+TEST_CASE("voxlight bake refuses a bad job file before it bakes anything, locally and for a cluster", "[bake]") {
+    const std::string voxlight = std::string(VOXLIGHT_BINARY_DIR) + "/voxlight";
+    if (!fs::exists(voxlight)) VL_SKIP(voxlight << " is not built");
+    const fs::path dir = tempDir("job-refused-bake");
+    const fs::path out = dir / "out";
+    const fs::path escaped = dir.parent_path() / "escaped";  // where "../../escaped" leads from out/<name>
+    const std::string box = sourceDir() + "/scenes/cornell_box.gltf";
+    // `voxlight bake <arguments> -o out`: its exit status and what it printed.
+    const auto bake = [&](const std::string& arguments) {
+        fs::remove_all(out);
+        fs::remove_all(escaped);
+        const fs::path log = dir / "log.txt";
+        const std::string command =
+            voxlight + " bake -q " + arguments + " -o " + out.string() + " > " + log.string() + " 2>&1";
+        const int status = std::system(command.c_str());
+        std::ifstream in(log);
+        return std::make_pair(status, std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()));
+    };
+    // A good job first, then the bad one: neither bakes.
+    std::ofstream(dir / "good.json") << R"({"settings": {"resolution": 8}, "scenes": [{"path": ")" + box + R"("}]})";
+    std::ofstream(dir / "bad.json") << R"({"scenes": [{"path": ")" + box + R"(", "name": "../../escaped"}]})";
+    const std::string both = (dir / "good.json").string() + " " + (dir / "bad.json").string();
+    const std::string refused = (dir / "bad.json").string() + R"(: scenes[0]: "name": "../../escaped" is not a folder name)";
+    for (const std::string& arguments : {both, "--slurm-dry-run " + both}) {
+        INFO(arguments);
+        const auto [status, output] = bake(arguments);
+        CHECK(status != 0);
+        CHECK_THAT(output, Catch::Contains(refused));
+        CHECK_FALSE(fs::exists(out));
+        CHECK_FALSE(fs::exists(escaped));
+    }
+    // The new user's slips: a misspelt key at the top and in a scene, each named with its place.
+    std::ofstream(dir / "slips.json") << R"({"lihgts": [], "scenes": [{"path": ")" + box + R"(", "skyy": {"radiance": 1}}]})";
+    auto [status, output] = bake((dir / "slips.json").string());
+    CHECK(status != 0);
+    CHECK_THAT(output, Catch::Contains((dir / "slips.json").string() + R"(: unknown key "lihgts" at the top level (did you mean "lights"?)"));
+    CHECK_FALSE(fs::exists(out));
+    std::ofstream(dir / "slips.json") << R"({"scenes": [{"path": ")" + box + R"(", "skyy": {"radiance": 1}}]})";
+    std::tie(status, output) = bake("--slurm-dry-run " + (dir / "slips.json").string());
+    CHECK(status != 0);
+    CHECK_THAT(output, Catch::Contains((dir / "slips.json").string() + R"(: scenes[0]: unknown key "skyy" (did you mean "sky"?))"));
+    CHECK_FALSE(fs::exists(out));
 }
 
 TEST_CASE("A bake job writes each atlas group into its own lightmap at its resolution", "[bake]") {
