@@ -500,12 +500,15 @@ BakedImage ReceiverShading::shadeCamera(const Camera& camera) const {
             lit.directRadiance, lit.indirectRadiance, receivers.albedo, Image()};
 }
 
-BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, const Image& indirect) {
+BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, const Image& indirect, const Scene& scene,
+                             const BakeSettings& settings) {
     BakedLightmap baked{atlas.name, sumRgb(direct, indirect), direct, indirect, atlas.mask, atlas.coveredTexels,
-                        atlas.meshes};
+                        atlas.meshes, {}};
     // Padding texels take their covered neighbours' values, so bilinear filtering at chart
     // edges does not bleed black.
     for (Image* image : {&baked.total, &baked.direct, &baked.indirect}) dilatePadding(*image, atlas.mask);
+    baked.seams = finishLightmapSeams(scene, atlas.meshes, atlas.mask, baked.direct, baked.indirect, baked.total,
+                                      settings.lightmapStitch);
     return baked;
 }
 
@@ -535,7 +538,7 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
         timed(result.stages, "lightmaps", [&] {
             for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics)) {
                 const ReceiverLighting lit = shading.shadeAtlasRows(atlas, 0, atlas.receivers.height);
-                result.lightmaps.push_back(finishLightmap(atlas, lit.direct, lit.indirect));
+                result.lightmaps.push_back(finishLightmap(atlas, lit.direct, lit.indirect, scene, settings));
             }
             return 0;
         });

@@ -7,6 +7,7 @@
 
 #include "bake/bake_settings.h"
 #include "bake/bright_patches.h"
+#include "bake/lightmap_seams.h"
 #include "bake/ray_gather.h"
 #include "bake/receivers.h"
 #include "bake/shade_receivers.h"
@@ -46,6 +47,7 @@ struct BakedLightmap {
     Image mask;        // 1 channel: 1 covered, 0 padding
     size_t coveredTexels = 0;
     std::vector<uint32_t> meshes;  // indices into Scene::meshes baked into it
+    LightmapSeamReport seams;      // its chart seams' jumps, before and after stitching
 };
 
 struct BakedImage {
@@ -147,8 +149,11 @@ private:
 };
 
 // An atlas's finished images from its receivers' direct and indirect light: the total, and
-// padding texels dilated from their covered neighbours in all three.
-BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, const Image& indirect);
+// padding texels dilated from their covered neighbours in all three; then its chart seams
+// (bake/lightmap_seams.h) measured and, with settings.lightmapStitch, stitched. `scene`: the
+// one the atlas was built from (its TEXCOORD_1).
+BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, const Image& indirect, const Scene& scene,
+                             const BakeSettings& settings);
 
 // Whether a bake with these settings renders its cameras' lightmap-lit images: it asks for
 // them and bakes both lightmaps and images.

@@ -112,6 +112,18 @@ nlohmann::json reportJson(const BakeReport& report, const BakeSettings& settings
         for (const SmallCharts& small : uvs.smallCharts)
             json["lightmap_uvs"]["small_charts"].push_back({{"mesh", small.mesh}, {"charts", small.charts}});
     }
+    if (report.lightmapSeams) {
+        // Measured on the total as scene.glb carries it, half a texel inside each chart.
+        const LightmapSeamReport& seams = *report.lightmapSeams;
+        json["lightmap_seams"] = {{"edges", seams.after.edges},
+                                  {"length_metres", seams.after.length},
+                                  {"stitched", seams.stitched},
+                                  {"texels_moved", seams.texelsMoved},
+                                  {"mean_relative_jump", seams.after.meanRelative},
+                                  {"pooled_relative_jump", seams.after.pooledRelative},
+                                  {"before_stitching", seams.before.meanRelative},
+                                  {"before_stitching_pooled", seams.before.pooledRelative}};
+    }
     json["lightmap_texels"] = report.lightmapTexels;
     json["covered_texels"] = report.coveredTexels;
     json["pixels"] = report.pixels;
@@ -230,6 +242,11 @@ void writeBakeFiles(const BakeJob& job, BakeResult& result, const ExportSource& 
     report.lightmapUvs = result.lightmapUvs;
 
     const auto writeStart = std::chrono::steady_clock::now();
+    if (!result.lightmaps.empty()) {
+        std::vector<LightmapSeamReport> seams;
+        for (const BakedLightmap& lightmap : result.lightmaps) seams.push_back(lightmap.seams);
+        report.lightmapSeams = combineSeamReports(seams);
+    }
     StagedFiles files(staging, report);
     for (const BakedLightmap& lightmap : result.lightmaps) {
         report.lightmapTexels += lightmap.total.pixels.size() / 3;

@@ -45,6 +45,8 @@ struct BakeReport {
     std::optional<LightmapUvReport> lightmapUvs;  // when the bake generated TEXCOORD_1
     size_t lightmapTexels = 0;
     size_t coveredTexels = 0;
+    // The lightmaps' chart seams (bake/lightmap_seams.h), all atlases pooled; none without lightmaps.
+    std::optional<LightmapSeamReport> lightmapSeams;
     size_t pixels = 0;
     long peakMemoryBytes = 0;  // the process's peak resident set size when the bake ended
     std::vector<std::string> warnings;

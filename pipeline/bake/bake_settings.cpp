@@ -151,6 +151,8 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
                                      " must be a texel size in metres from 1e-6 to 1e6 (or 0: none)");
              s.lightmap.texelSize = texel;
          }},
+        {"lightmap-stitch", "stitch lightmap chart seams: where one surface is split between two charts, move the texels on both sides by a small least-squares solve so they read one value along the split (default true)",
+         [](S& s, const std::string& v) { s.lightmapStitch = parseBoolSetting("lightmap-stitch", v); }},
         {"lightmap-subsamples", "n × n sub-texel probes per texel (default 4)",
          [](S& s, const std::string& v) { s.lightmap.subsamplesPerAxis = parseIntSetting("lightmap-subsamples", v, 1, 8); }},
         {"emitter-strata", "n × n shadow points per emissive triangle for the exact direct term, ⌈n√2⌉² per parallelogram quad (default 4)",
@@ -284,6 +286,7 @@ std::string describeBakeSettings(const BakeSettings& s) {
     if (s.lightmap.texelSize > 0.0) out << ", lightmap-texel=" << real(s.lightmap.texelSize);
     if (!s.generateLightmapUvs) out << ", lightmap-uvs=false";
     if (s.lambertMaterials) out << ", materials=lambert";
+    if (!s.lightmapStitch) out << ", lightmap-stitch=false";
     if (s.filesOutsideScene) out << ", files-outside-scene=true";
     if (!s.voxel.ownFrame) out << ", grid-frame=world";
     for (size_t g = 0; g < s.lightmap.atlases.size(); ++g) {

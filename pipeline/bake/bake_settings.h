@@ -115,6 +115,9 @@ struct BakeSettings {
     int gatherRays = 14;
     int bounceRays = 14;
     LightmapSettings lightmap;
+    // Chart seams stitched after dilation (bake/lightmap_seams.h): the two sides of a surface
+    // split between charts read one value, so the viewer shows no line there.
+    bool lightmapStitch = true;
     DirectLightSettings direct;
     // A uniform sky's radiance, W/(m²·sr) (scene.h Sky; glTF has none): zero, no sky.
     vec3 sky{0.0f};

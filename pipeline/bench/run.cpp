@@ -123,6 +123,7 @@ void runVctPoint(const BenchOptions& options, const Comparer& comparer, BenchPoi
     }
     p.voxelSize = report.voxelSize;
     p.voxelSizeSetBy = report.voxelSizeChoice.setBy;
+    p.seams = report.lightmapSeams;
     comparer.fromFiles(p, job.outputDir, "lightmap", imageStemOf(report));
 }
 
@@ -280,6 +281,10 @@ BenchResult runBench(const BenchOptions& options) {
                          spec.method.c_str(), spec.label.c_str(), p.lightmapSeconds, percentOrDash(p.lightmap).c_str(),
                          percentOrDash(p.lightmapIndirect).c_str(), p.imageSeconds, percentOrDash(p.image).c_str(),
                          percentOrDash(p.lightmapped).c_str());
+        if (!options.quiet && p.ok && p.seams)
+            std::fprintf(stderr, "bench: %s %s: %zu lightmap seams, mean jump %.2f%% (%.2f%% before stitching)\n",
+                         spec.method.c_str(), spec.label.c_str(), p.seams->after.edges,
+                         100.0 * p.seams->after.meanRelative, 100.0 * p.seams->before.meanRelative);
         result.points.push_back(std::move(p));
     }
     if (!options.cyclesFilesDir.empty()) {

@@ -55,6 +55,7 @@ struct BenchPointResult {
     // The camera lit by the point's lightmap as it ships (bake/lightmap_image.h), against the
     // reference image; its time is the lightmap's, what making the lightmap cost.
     BenchError lightmapped;
+    std::optional<LightmapSeamReport> seams;  // vct: the lightmap's chart seams (bake/lightmap_seams.h)
     double voxelSize = 0.0;                 // vct: the bake's voxel size (m) and what set it
     std::string voxelSizeSetBy;
     std::string outputDir;                  // its outputs, relative to the bench folder

@@ -351,7 +351,7 @@ BakeReport mergeScene(const BakeJob& job, const std::string& sceneWork, const Sc
                     std::copy(i.begin(), i.end(), indirect.pixels.begin() + long(offset));
                     lightmapSeconds += records[size_t(receiver) + 1].seconds;
                 }
-                result.lightmaps.push_back(finishLightmap(atlas, direct, indirect));
+                result.lightmaps.push_back(finishLightmap(atlas, direct, indirect, scene, job.settings));
             }
         }
         for (int c = 0; c < units.cameras; ++c) {

@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "support/paths.h"
 #include "cluster/three_scenes.h"
+#include "scene/gltf_builder.h"
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
@@ -94,6 +95,56 @@ TEST_CASE("A scene whose lightmaps have no mesh to bake merges as its local bake
     job.outputDir = (root / "split").string();
     const std::string work = (root / "work").string();
     const SceneUnits units = planSceneUnits(job, 2);
+    REQUIRE(runVoxelUnit(job, work).ok);
+    for (int r = 0; r < units.receiverCount(); ++r) REQUIRE(runReceiverUnit(job, work, units, r).ok);
+    const BakeReport merged = mergeScene(job, work, units);
+    INFO(merged.error);
+    REQUIRE(merged.ok);
+    CHECK(merged.files == local.files);
+    test::checkSameOutputs(root / "local", root / "split", local.files);
+}
+
+TEST_CASE("A lightmap whose seams are stitched merges as its local bake", "[cluster]") {
+    // A 2 × 2 m floor split at x = 1 into two charts of a 32² lightmap, the second turned a
+    // quarter and coarser (as bake/lightmap_seams_test.cpp's), under a point light: its seam is
+    // stitched after the bands are put together, as the local bake stitches it.
+    const fs::path root = test::tempDir("cluster-seams");
+    fs::remove_all(root);
+    fs::create_directories(root);
+    test::GltfBuilder b;
+    const int positions = b.vec3({0, 0, 0, 0, 0, 2, 1, 0, 2, 1, 0, 0, 1, 0, 0, 1, 0, 2, 2, 0, 2, 2, 0, 0});
+    const int normals = b.vec3({0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0});
+    std::vector<float> uv1 = {2, 2, 2, 18, 10, 18, 10, 2, 2, 20, 14, 20, 14, 26, 2, 26};
+    for (float& v : uv1) v /= 32.0f;
+    const int texcoords = b.vec2(uv1);
+    const int indices = b.indices({0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7});
+    const std::string members =
+        R"("meshes": [{"name": "Floor", "primitives": [{"attributes": {"POSITION": )" + std::to_string(positions) +
+        R"(, "NORMAL": )" + std::to_string(normals) + R"(, "TEXCOORD_1": )" + std::to_string(texcoords) +
+        R"(}, "indices": )" + std::to_string(indices) + R"(}]}],
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 30}]}},
+        "scene": 0, "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0.7, 1.2, 0.9]}])";
+    BakeJob job;
+    job.scenePath = b.writeGltf(root.string(), "split_floor", members);
+    job.settings.quiet = true;
+    job.settings.voxel.resolution = 16;
+    job.settings.lightmap.width = job.settings.lightmap.height = 32;
+    job.outputDir = (root / "local").string();
+    const BakeReport local = runBake(job);
+    INFO(local.error);
+    REQUIRE(local.ok);
+    REQUIRE(local.lightmapSeams);
+    CHECK(local.lightmapSeams->after.edges == 1);
+    CHECK(local.lightmapSeams->stitched);
+    CHECK(local.lightmapSeams->texelsMoved > 0);
+    CHECK(local.lightmapSeams->after.meanRelative < local.lightmapSeams->before.meanRelative);
+
+    job.outputDir = (root / "split").string();
+    const std::string work = (root / "work").string();
+    const SceneUnits units = planSceneUnits(job, 3);
+    REQUIRE(units.atlases.size() == 1);
     REQUIRE(runVoxelUnit(job, work).ok);
     for (int r = 0; r < units.receiverCount(); ++r) REQUIRE(runReceiverUnit(job, work, units, r).ok);
     const BakeReport merged = mergeScene(job, work, units);

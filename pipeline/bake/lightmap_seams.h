@@ -1,0 +1,102 @@
+// Lightmap chart seams: where one surface in 3D is two edges in the atlas, each side reads
+// its own texels, and a viewer shows a line where the two disagree.
+//
+// Seams. Among an atlas's meshes (their TEXCOORD_1), an edge shared by two triangles in 3D
+// (both end positions equal once welded, to a millionth of the meshes' extent) whose uv1
+// differs at either end. Only where the surface is smooth there: the two triangles' vertex
+// normals agree at both ends within kSeamNormalDegrees (the bake shades texels with those
+// normals, so the light is continuous there); a crease (a wall meeting the floor) has two
+// values by right and is no seam. A fold of a smooth-shaded mesh (a low-poly cylinder, a
+// rounded cushion) is a seam however sharp: it is shaded as one surface. Edges between
+// different atlases are not seen here.
+//
+// The jump. Along each seam, at evenly spaced points (about two per texel of its longer
+// side), the lightmap is read bilinearly (as the viewer does, bake/lightmap_image.h) on both
+// sides, `inset` texels inside each chart, perpendicular to the edge in texel space. A pair
+// reads a and b (RGB); its relative jump is Σ|a − b| / Σ (a + b)/2 over the three channels.
+// The figures: the mean of that over all pairs, each weighted by its share of its seam's 3D
+// length; and the pooled ratio Σ w|a − b| / Σ w (a + b)/2, which counts a bright seam more.
+//
+// Stitching (after dilation): the texels that the seams' bilinear reads touch (covered ones
+// and the padding ring beyond a chart's edge) move by a least-squares solve: minimise
+//     Σ_pairs (bilinear_a(x) − bilinear_b(x))² + Σ_texels λ (x − baked)²
+// with λ = kStitchCoveredWeight for covered texels (stay near the bake) and
+// kStitchPaddingWeight for padding ones (free to take what the seam needs). The pairs are
+// read at the metric's inset and on the edge itself (what the viewer shows at the line). The
+// solve is linear in the baked values, so direct and indirect are solved and the total is
+// their sum again. Conjugate gradients with a diagonal preconditioner, serial: the same
+// bytes at any thread count (and in a cluster's merge, which calls the same finishLightmap).
+// Production lightmappers do the same (Castaño, "Lightmap seams", The Witness).
+#pragma once
+
+#include "core/image.h"
+#include "scene/scene.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace vl {
+
+constexpr float kSeamNormalDegrees = 15.0f;
+constexpr float kSeamInsetTexels = 0.5f;
+// λ against the pairs' weight 1: the smaller, the closer the seams come to one value (the
+// grey-white room: 2.0 % at 0.05, 1.2 % at 0.01, 0.9 % at 0.002, each step costing more
+// iterations); padding moves 25 times more freely than covered texels.
+constexpr double kStitchCoveredWeight = 0.01;
+constexpr double kStitchPaddingWeight = 0.0004;
+
+// One side of a seam, in texel coordinates (uv1 × (width, height)): the edge from `a` to `b`,
+// both in the order of the 3D edge's ends, and the unit direction into its triangle.
+struct SeamSide {
+    vec2 a{0.0f}, b{0.0f};
+    vec2 inward{0.0f};
+};
+
+struct LightmapSeam {
+    SeamSide sides[2];
+    double length = 0.0;       // in 3D, scene units (metres)
+    float foldDegrees = 0.0f;  // the angle between the two triangles' planes (smooth-shaded folds)
+};
+
+// The seams of an atlas of width × height texels holding `meshes` (indices into scene.meshes),
+// in a fixed order (meshes, triangles and edges as stored).
+std::vector<LightmapSeam> findLightmapSeams(const Scene& scene, const std::vector<uint32_t>& meshes, int width,
+                                            int height);
+
+struct SeamJump {
+    size_t edges = 0;
+    double length = 0.0;          // the seams' 3D length
+    double meanRelative = 0.0;    // length-weighted mean of the pairs' relative jumps
+    double pooledRelative = 0.0;  // Σ w|a − b| / Σ w (a + b)/2
+    // The sums the two ratios come from, so atlases combine exactly: Σ w over the pairs
+    // counted, Σ w · relative jump, Σ w|a − b| and Σ w (a + b)/2 (channels summed).
+    double weight = 0.0, relativeSum = 0.0, jumpSum = 0.0, levelSum = 0.0;
+};
+
+// `texels`: RGB, the atlas's size. Pairs black on both sides are left out.
+SeamJump measureSeamJump(const std::vector<LightmapSeam>& seams, const Image& texels, float inset = kSeamInsetTexels);
+
+// Stitches `direct` and `indirect` (RGB, the atlas's size, padding already dilated) along the
+// seams and sets `total` = direct + indirect where they changed. mask: 1 channel, > 0.5
+// covered. Returns the texels moved.
+size_t stitchLightmapSeams(const std::vector<LightmapSeam>& seams, const Image& mask, Image& direct, Image& indirect,
+                           Image& total);
+
+// What bake.json reports of an atlas's seams: measured on the total as scene.glb carries it
+// (bake/lightmap_image.h shippedLightmapTexels), before and after stitching.
+struct LightmapSeamReport {
+    bool stitched = false;
+    size_t texelsMoved = 0;
+    SeamJump before;
+    SeamJump after;  // = before when not stitched
+};
+
+// An atlas's seams found, measured on its total as it ships, stitched when `stitch` says and
+// measured again: what finishLightmap (bake.h) does after dilation.
+LightmapSeamReport finishLightmapSeams(const Scene& scene, const std::vector<uint32_t>& meshes, const Image& mask,
+                                       Image& direct, Image& indirect, Image& total, bool stitch);
+
+// The pooled figures of several atlases (each atlas's jumps weighted by its seams' length).
+LightmapSeamReport combineSeamReports(const std::vector<LightmapSeamReport>& reports);
+
+}  // namespace vl
