@@ -436,7 +436,13 @@ bool ReceiverShading::texelGather() const {
     return settings_.lightmapGather == LightmapGather::Texels && !onGpu_ && gathered_ && gathered_->raysPerAxis > 0;
 }
 
-ReceiverLighting ReceiverShading::shadeAtlasRows(const LightmapAtlas& atlas, int rowBegin, int rowEnd) const {
+ReceiverLighting ReceiverShading::shadeAtlasRows(const LightmapAtlas& given, int rowBegin, int rowEnd) const {
+    LightmapAtlas inside;
+    if (settings_.lightmapSide == LightmapSide::Inside) {
+        inside = given;
+        orientLightmapSamples(inside.receivers, tracing_.bvh.view(), tracing_.traceScene.view());
+    }
+    const LightmapAtlas& atlas = settings_.lightmapSide == LightmapSide::Inside ? inside : given;
     const SurfaceSampleSet& receivers = atlas.receivers;
     const size_t first = static_cast<size_t>(rowBegin) * static_cast<size_t>(receivers.width);
     const size_t last = static_cast<size_t>(rowEnd) * static_cast<size_t>(receivers.width);

@@ -121,6 +121,8 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          }},
         {"texel-gather-spacing", "texels between a lightmap's gather records; 0: about 1.5 voxels (default 0)",
          [](S& s, const std::string& v) { s.texelGatherSpacing = parseIntSetting("texel-gather-spacing", v, 0, 64); }},
+        {"lightmap-side", "which side of a double-sided surface its lightmap texels hold: inside (the side that sees less open sky, what a person in the room sees; a thin window frame whose front faces out is lit from the room) or front (the triangles' winding) (default inside)",
+         [](S& s, const std::string& v) { s.lightmapSide = parseLightmapSide(v); }},
         {"lightmap-filter", "passes of the edge-stopping filter over a lightmap's gather records, each twice as wide (records one surface holds, whose difference their noise explains, are averaged); 0: off (default 3)",
          [](S& s, const std::string& v) { s.lightmapFilterPasses = parseIntSetting("lightmap-filter", v, 0, 5); }},
         {"lightmap-res", "lightmap atlas width and height in texels, exactly (generated UVs get the texel size that fits them); auto: the bake sizes each atlas, the smallest power-of-two square that holds it at texels of half a voxel or finer, up to 4096 (default 256)",
@@ -286,6 +288,7 @@ std::string describeBakeSettings(const BakeSettings& s) {
     if (s.lightmap.texelSize > 0.0) out << ", lightmap-texel=" << real(s.lightmap.texelSize);
     if (!s.generateLightmapUvs) out << ", lightmap-uvs=false";
     if (s.lambertMaterials) out << ", materials=lambert";
+    if (s.lightmapSide != LightmapSide::Inside) out << ", lightmap-side=" << toString(s.lightmapSide);
     if (!s.lightmapStitch) out << ", lightmap-stitch=false";
     if (s.filesOutsideScene) out << ", files-outside-scene=true";
     if (!s.voxel.ownFrame) out << ", grid-frame=world";

@@ -2,6 +2,7 @@
 // (--name value) and a job-file key ("name": value) through bakeSettingsTable().
 #pragma once
 
+#include "bake/lightmap_sides.h"
 #include "bake/bright_patches.h"
 #include "lighting/direct_light.h"
 #include "bake/gather_visibility.h"
@@ -112,6 +113,7 @@ struct BakeSettings {
     LightmapGather lightmapGather = LightmapGather::Texels;
     int texelGatherSpacing = 0;
     int lightmapFilterPasses = 3;  // the texel records' edge-stopping filter (bake/texel_gather.h); 0: off
+    LightmapSide lightmapSide = LightmapSide::Inside;  // a double-sided surface's side lightmaps hold (bake/lightmap_sides.h)
     int gatherRays = 14;
     int bounceRays = 14;
     LightmapSettings lightmap;

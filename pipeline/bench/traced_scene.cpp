@@ -1,5 +1,6 @@
 #include "bench/traced_scene.h"
 
+#include "bake/lightmap_sides.h"
 #include "core/diagnostics.h"
 
 #include <cmath>
@@ -15,7 +16,12 @@ BenchTraceScene loadBenchTraceScene(const BakeJob& job) {
     if (job.settings.outputs.lightmaps) {
         Diagnostics diagnostics(job.settings.strict, false);
         std::vector<LightmapAtlas> atlases = buildLightmapReceivers(s.scene, job.settings.lightmap, diagnostics);
-        if (!atlases.empty()) s.atlas = std::move(atlases.front());
+        if (!atlases.empty()) {
+            s.atlas = std::move(atlases.front());
+            // The side the bake's lightmap holds, so the reference traces the same surface.
+            if (job.settings.lightmapSide == LightmapSide::Inside)
+                orientLightmapSamples(s.atlas->receivers, s.bvh.view(), s.trace.view());
+        }
     }
     if (job.settings.outputs.images) {
         const BakeSettings& b = job.settings;
