@@ -296,12 +296,7 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
         records.insert(records.end(), blockRecords[b].begin(), blockRecords[b].end());
     }
     out.ownRecords = records.size() - latticeRecords;
-    // Own records go unfiltered (no lattice neighbours on their surface): twice the rays per
-    // axis give them the noise a filtered lattice record has.
-    TexelGatherSettings own = settings;
-    if (const char* e = std::getenv("VL_OWN")) own.raysPerAxis = settings.raysPerAxis * std::atoi(e), own.brightSamples = settings.brightSamples * std::atoi(e) * std::atoi(e);
-    if (std::getenv("VL_OWNCOUNT")) std::fprintf(stderr, "records %zu own %zu\n", latticeRecords, records.size() - latticeRecords);
-    gatherRecords(records, latticeRecords, W, mips, faces, bright, bvh, scene, own);
+    gatherRecords(records, latticeRecords, W, mips, faces, bright, bvh, scene, settings);
 
     // Each sample: its lattice records, bilinearly, else its block's record.
     tbb::parallel_for(rowBegin, rowEnd, [&](int y) {
