@@ -8,8 +8,6 @@
 
 #include <tbb/parallel_for.h>
 
-#include <algorithm>
-#include <atomic>
 #include <vector>
 
 namespace vl {
@@ -24,25 +22,41 @@ const char* toString(LightmapSide side) { return side == LightmapSide::Front ? "
 
 namespace {
 
-constexpr int kSideRaysPerAxis = 4;
-constexpr int kClearlyFewer = 4;  // of the 16 rays
+constexpr int kSideRays = 16;     // 4 points × 2 × 2
+constexpr int kClearlyFewer = 4;  // of them
 
-// Rays of a 4 × 4 jittered cosine fan about `normal` from `origin` that leave the scene.
-int escapes(const BvhView& bvh, const vec3& origin, const vec3& normal, Pcg32& rng) {
+// What 2 × 2 jittered cosine rays about `normal` from each of four points of a triangle (its
+// centroid and the points halfway from it to each corner: a big floor triangle's centroid may
+// lie under a block standing on it) find: rays that leave the scene, and rays that meet a
+// triangle from behind (that side is inside a closed solid).
+struct SideView {
+    int open = 0, behind = 0;
+};
+
+SideView lookFrom(const BvhView& bvh, const TraceSceneView& scene, const vec3* corner, const vec3& normal, Pcg32& rng) {
     vec3 t, b;
     orthonormalBasis(normal, t, b);
-    int open = 0;
-    for (int i = 0; i < kSideRaysPerAxis; ++i)
-        for (int j = 0; j < kSideRaysPerAxis; ++j) {
-            vec2 u;
-            rng.next2D(u.x, u.y);
-            const vec3 d = sampleCosineHemisphere(vec2((float(i) + u.x) / kSideRaysPerAxis, (float(j) + u.y) / kSideRaysPerAxis));
-            Ray ray;
-            ray.origin = origin;
-            ray.direction = glm::normalize(d.x * t + d.y * b + d.z * normal);
-            if (!intersectAny(bvh, ray)) ++open;
-        }
-    return open;
+    const vec3 centroid = (corner[0] + corner[1] + corner[2]) / 3.0f;
+    const vec3 points[4] = {centroid, 0.5f * (centroid + corner[0]), 0.5f * (centroid + corner[1]),
+                            0.5f * (centroid + corner[2])};
+    SideView view;
+    for (const vec3& point : points)
+        for (int i = 0; i < 2; ++i)
+            for (int j = 0; j < 2; ++j) {
+                vec2 u;
+                rng.next2D(u.x, u.y);
+                const vec3 d = sampleCosineHemisphere(vec2((float(i) + u.x) / 2.0f, (float(j) + u.y) / 2.0f));
+                Ray ray;
+                ray.origin = offsetRayOrigin(point, normal, bvh.extent);
+                ray.direction = glm::normalize(d.x * t + d.y * b + d.z * normal);
+                Hit hit;
+                if (!intersectClosest(bvh, ray, hit)) {
+                    ++view.open;
+                    continue;
+                }
+                if (glm::dot(windingCross(scene, hit.triangle), ray.direction) > 0.0f) ++view.behind;
+            }
+    return view;
 }
 
 }  // namespace
@@ -60,14 +74,18 @@ size_t orientLightmapSamples(SurfaceSampleSet& samples, const BvhView& bvh, cons
     tbb::parallel_for(size_t(0), triangles.size(), [&](size_t k) {
         const uint32_t t = triangles[k];
         const vec3* v = scene.vertices + 3 * size_t(t);
-        const vec3 cross = glm::cross(v[1] - v[0], v[2] - v[0]);
+        const vec3 cross = windingCross(scene, t);
         const float area2 = glm::length(cross);
         if (!(area2 > 0.0f)) return;
-        const vec3 n = cross / area2, centroid = (v[0] + v[1] + v[2]) / 3.0f;
+        const vec3 n = cross / area2;
         Pcg32 rng = Pcg32::forItem(t, 0, 0x51de);
-        const int front = escapes(bvh, offsetRayOrigin(centroid, n, bvh.extent), n, rng);
-        const int back = escapes(bvh, offsetRayOrigin(centroid, -n, bvh.extent), -n, rng);
-        if (back + kClearlyFewer <= front) turn[t] = 1;
+        const SideView front = lookFrom(bvh, scene, v, n, rng);
+        const SideView back = lookFrom(bvh, scene, v, -n, rng);
+        // A side whose rays mostly meet triangles from behind lies inside a closed solid (a
+        // block's double-sided faces, seen from within the block): never that one.
+        const bool frontEnclosed = 2 * front.behind > kSideRays, backEnclosed = 2 * back.behind > kSideRays;
+        if (backEnclosed) return;
+        if (frontEnclosed || back.open + kClearlyFewer <= front.open) turn[t] = 1;
     });
     size_t turned = 0;
     for (uint32_t t : triangles) turned += turn[t];

@@ -23,9 +23,10 @@ enum class LightmapSide {
 LightmapSide parseLightmapSide(const std::string& text);  // SettingsError naming lightmap-side
 const char* toString(LightmapSide side);
 
-// Per triangle of double-sided material holding samples: 4 × 4 cosine rays from its centroid on
-// each side; the back is taken when its rays leave the scene at least 4 fewer times. The same
-// bytes at any thread count. Returns the triangles turned.
+// Per triangle of double-sided material holding samples: 16 cosine rays on each side, from four
+// points of it. A side most of whose rays meet triangles from behind is inside a closed solid and
+// never taken; otherwise the back is taken when the front is enclosed or its rays leave the
+// scene at least 4 fewer times. The same bytes at any thread count. Returns the triangles turned.
 size_t orientLightmapSamples(SurfaceSampleSet& samples, const BvhView& bvh, const TraceSceneView& scene);
 
 }  // namespace vl
