@@ -65,7 +65,7 @@ VL_HOSTDEV inline vec3 fanDirection(int i, int j, int n) {
 // the cosine-weighted hemisphere: with one jitter per fan, uniform over the fans, each ray is
 // uniform in its stratum, so the fan's estimate is unbiased. The fixed rays above are a
 // quadrature: a small bright source (a sun in a sky image) falls in or between the same rings
-// of elevation at every point of a floor, and a floor's mean was 1.2% off that way.
+// of elevation at every point of a floor and biases its mean (docs/accuracy.md).
 VL_HOSTDEV inline vec3 fanDirectionJittered(int i, int j, int n, const vec2& jitter) {
     const vec2 d = sampleConcentricDisk(vec2((float(i) + jitter.x) / float(n), (float(j) + jitter.y) / float(n)));
     return vec3(d, glm::sqrt(glm::max(0.0f, 1.0f - glm::dot(d, d))));
