@@ -3,6 +3,7 @@
 #include "bake/bright_patches.h"
 #include "bake/dilate.h"
 #include "bake/lightmap_image.h"
+#include "bake/open_space.h"
 #include "bake/ray_gather.h"
 #include "bake/shade_receivers.h"
 #include "bake/texel_gather.h"
@@ -151,7 +152,8 @@ std::string generatedAtlasName(const LightmapSettings& settings) {
 }
 
 ReceiverScene::ReceiverScene(const Scene& scene)
-    : triangles(gatherTriangles(scene)), bvh(Bvh::build(triangles)), traceScene(TraceScene::build(scene, triangles)) {}
+    : triangles(gatherTriangles(scene)), bvh(Bvh::build(triangles)), traceScene(TraceScene::build(scene, triangles)),
+      viewpoints(cameraViewpoints(scene)) {}
 
 GeneratedUvs generateSharedAtlasUvs(Scene& scene, const BakeSettings& settings, double voxelSize, Diagnostics& diagnostics) {
     GeneratedUvs out;
@@ -440,7 +442,7 @@ ReceiverLighting ReceiverShading::shadeAtlasRows(const LightmapAtlas& given, int
     LightmapAtlas inside;
     if (settings_.lightmapSide == LightmapSide::Inside) {
         inside = given;
-        orientLightmapSamples(inside.receivers, tracing_.bvh.view(), tracing_.traceScene.view());
+        orientLightmapSamples(inside.receivers, tracing_.bvh.view(), tracing_.traceScene.view(), tracing_.viewpoints);
     }
     const LightmapAtlas& atlas = settings_.lightmapSide == LightmapSide::Inside ? inside : given;
     const SurfaceSampleSet& receivers = atlas.receivers;

@@ -83,6 +83,7 @@ struct ReceiverScene {
     SceneTriangles triangles;
     Bvh bvh;
     TraceScene traceScene;
+    std::vector<Viewpoint> viewpoints;  // the scene's own cameras: where people stand (bake/open_space.h)
     explicit ReceiverScene(const Scene& scene);
 };
 

@@ -121,7 +121,7 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          }},
         {"texel-gather-spacing", "texels between a lightmap's gather records; 0: about 1.5 voxels (default 0)",
          [](S& s, const std::string& v) { s.texelGatherSpacing = parseIntSetting("texel-gather-spacing", v, 0, 64); }},
-        {"lightmap-side", "which side of a double-sided surface its lightmap texels hold: inside (the side that sees less open sky, what a person in the room sees, never the inside of a closed solid; a thin window frame whose front faces out is lit from the room) or front (the triangles' winding) (default inside)",
+        {"lightmap-side", "which side of a double-sided surface its lightmap texels hold: inside (the side that sees less open sky, what a person in the room sees, never the inside of a closed solid, and a side facing the open space the scene's cameras stand in is never taken for one; a thin window frame whose front faces out is lit from the room) or front (the triangles' winding) (default inside)",
          [](S& s, const std::string& v) { s.lightmapSide = parseLightmapSide(v); }},
         {"lightmap-filter", "passes of the edge-stopping filter over a lightmap's gather records, each twice as wide (records one surface holds, whose difference their noise explains, are averaged); 0: off (default 3)",
          [](S& s, const std::string& v) { s.lightmapFilterPasses = parseIntSetting("lightmap-filter", v, 0, 5); }},

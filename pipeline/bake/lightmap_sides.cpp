@@ -27,13 +27,15 @@ constexpr int kClearlyFewer = 4;  // of them
 
 // What 2 × 2 jittered cosine rays about `normal` from each of four points of a triangle (its
 // centroid and the points halfway from it to each corner: a big floor triangle's centroid may
-// lie under a block standing on it) find: rays that leave the scene, and rays that meet a
-// triangle from behind (that side is inside a closed solid).
+// lie under a block standing on it) find: rays that leave the scene, rays that meet a triangle
+// of the side's own material from behind (a closed solid is one material, as a block is), and
+// rays that meet any triangle from behind.
 struct SideView {
-    int open = 0, behind = 0;
+    int open = 0, behindOwn = 0, behind = 0;
 };
 
-SideView lookFrom(const BvhView& bvh, const TraceSceneView& scene, const vec3* corner, const vec3& normal, Pcg32& rng) {
+SideView lookFrom(const BvhView& bvh, const TraceSceneView& scene, const vec3* corner, const vec3& normal, Pcg32& rng,
+                  uint32_t material) {
     vec3 t, b;
     orthonormalBasis(normal, t, b);
     const vec3 centroid = (corner[0] + corner[1] + corner[2]) / 3.0f;
@@ -54,15 +56,41 @@ SideView lookFrom(const BvhView& bvh, const TraceSceneView& scene, const vec3* c
                     ++view.open;
                     continue;
                 }
-                if (glm::dot(windingCross(scene, hit.triangle), ray.direction) > 0.0f) ++view.behind;
+                if (glm::dot(windingCross(scene, hit.triangle), ray.direction) > 0.0f) {
+                    ++view.behind;
+                    view.behindOwn += scene.materialIds[hit.triangle] == material;
+                }
             }
     return view;
 }
 
+// How many of a triangle's four points (as lookFrom's) have open space on the side `normal`
+// faces: probed two cells out, or halfway to a surface nearer than that (a gap too thin to
+// stand in, which the grid marks crossed). Two cells clear the triangle's own cells.
+int openPoints(const OpenSpace& space, const BvhView& bvh, const vec3* corner, const vec3& normal) {
+    const vec3 centroid = (corner[0] + corner[1] + corner[2]) / 3.0f;
+    const vec3 points[4] = {centroid, 0.5f * (centroid + corner[0]), 0.5f * (centroid + corner[1]),
+                            0.5f * (centroid + corner[2])};
+    const float reach = 2.0f * space.cellSize();
+    int open = 0;
+    for (const vec3& point : points) {
+        Ray ray;
+        ray.origin = offsetRayOrigin(point, normal, bvh.extent);
+        ray.direction = normal;
+        ray.tMax = reach;
+        Hit hit;
+        const float distance = intersectClosest(bvh, ray, hit) ? 0.5f * hit.t : reach;
+        open += space.open(ray.origin + distance * normal);
+    }
+    return open;
+}
+
 }  // namespace
 
-size_t orientLightmapSamples(SurfaceSampleSet& samples, const BvhView& bvh, const TraceSceneView& scene) {
+size_t orientLightmapSamples(SurfaceSampleSet& samples, const BvhView& bvh, const TraceSceneView& scene,
+                             const std::vector<Viewpoint>& viewpoints) {
     if (samples.samples.empty() || scene.triangleCount == 0) return 0;
+    const OpenSpace space(scene, viewpoints);
     // The double-sided triangles the samples lie on, in triangle order.
     std::vector<uint8_t> held(scene.triangleCount, 0);
     for (const SurfaceSample& s : samples.samples)
@@ -79,11 +107,18 @@ size_t orientLightmapSamples(SurfaceSampleSet& samples, const BvhView& bvh, cons
         if (!(area2 > 0.0f)) return;
         const vec3 n = cross / area2;
         Pcg32 rng = Pcg32::forItem(t, 0, 0x51de);
-        const SideView front = lookFrom(bvh, scene, v, n, rng);
-        const SideView back = lookFrom(bvh, scene, v, -n, rng);
-        // A side whose rays mostly meet triangles from behind lies inside a closed solid (a
-        // block's double-sided faces, seen from within the block): never that one.
-        const bool frontEnclosed = 2 * front.behind > kSideRays, backEnclosed = 2 * back.behind > kSideRays;
+        const SideView front = lookFrom(bvh, scene, v, n, rng, scene.materialIds[t]);
+        const SideView back = lookFrom(bvh, scene, v, -n, rng, scene.materialIds[t]);
+        // Never a side inside a closed solid: one whose rays mostly meet its own material from
+        // behind (a block's faces seen from within), or whose every ray meets something from
+        // behind and that faces no open space (the sealed gap under a floor slab in a wall
+        // shell). Counting any material alone would also seal a room whose walls were wound
+        // outward: from within it looks the same, but people stand in it.
+        auto enclosed = [&](const SideView& side, const vec3& normal) {
+            return 2 * side.behindOwn > kSideRays ||
+                   (side.behind == kSideRays && (space.empty() || openPoints(space, bvh, v, normal) == 0));
+        };
+        const bool frontEnclosed = enclosed(front, n), backEnclosed = enclosed(back, -n);
         if (backEnclosed) return;
         if (frontEnclosed || back.open + kClearlyFewer <= front.open) turn[t] = 1;
     });

@@ -7,11 +7,13 @@
 // person inside the room sees), where the difference is clear, and left facing front otherwise.
 #pragma once
 
+#include "bake/open_space.h"
 #include "trace/bvh.h"
 #include "trace/surface_samples.h"
 #include "trace/trace_scene.h"
 
 #include <string>
+#include <vector>
 
 namespace vl {
 
@@ -20,13 +22,19 @@ enum class LightmapSide {
     Inside,  // a double-sided triangle's side that sees less open sky
 };
 
+// Changes when the rule below does: caches of what it decides (the bench's references) key on it.
+constexpr int kLightmapSideRule = 2;
+
 LightmapSide parseLightmapSide(const std::string& text);  // SettingsError naming lightmap-side
 const char* toString(LightmapSide side);
 
 // Per triangle of double-sided material holding samples: 16 cosine rays on each side, from four
-// points of it. A side most of whose rays meet triangles from behind is inside a closed solid and
-// never taken; otherwise the back is taken when the front is enclosed or its rays leave the
-// scene at least 4 fewer times. The same bytes at any thread count. Returns the triangles turned.
-size_t orientLightmapSamples(SurfaceSampleSet& samples, const BvhView& bvh, const TraceSceneView& scene);
+// points of it. A side inside a closed solid is never taken: most of its rays meet its own
+// material from behind, or all of them meet something from behind and it faces no open space
+// the viewpoints (bake/open_space.h) reach. Otherwise the back is taken when the front is
+// enclosed or its rays leave the scene at least 4 fewer times. The same bytes at any thread
+// count. Returns the triangles turned.
+size_t orientLightmapSamples(SurfaceSampleSet& samples, const BvhView& bvh, const TraceSceneView& scene,
+                             const std::vector<Viewpoint>& viewpoints);
 
 }  // namespace vl

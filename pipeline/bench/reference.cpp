@@ -57,7 +57,7 @@ std::string referenceKey(const BakeJob& job, const BenchReferenceSettings& setti
     const BakeSettings& b = job.settings;
     key << "bench-reference v1; scene " << hex(hashSceneFiles(job.scenePath)) << "; lightmaps " << b.outputs.lightmaps
         << " " << b.lightmap.width << "x" << b.lightmap.height << " n" << b.lightmap.subsamplesPerAxis << " tri"
-        << b.lightmap.samplePerTriangle << " side " << toString(b.lightmapSide) << "; images " << b.outputs.images << " " << b.imageWidth << "x" << b.imageHeight
+        << b.lightmap.samplePerTriangle << " side " << toString(b.lightmapSide) << " rule " << kLightmapSideRule << "; images " << b.outputs.images << " " << b.imageWidth << "x" << b.imageHeight
         << "; noise " << settings.targetNoise << " pilot " << settings.pilotSpp << " max " << settings.maxSpp << " budget "
         << settings.budgetSeconds << " seed " << settings.seed << "; bounces " << PathSettings{}.maxBounces << "; sky "
         << b.sky.x << "," << b.sky.y << "," << b.sky.z;

@@ -1,6 +1,7 @@
 #include "bench/traced_scene.h"
 
 #include "bake/lightmap_sides.h"
+#include "bake/open_space.h"
 #include "core/diagnostics.h"
 
 #include <cmath>
@@ -20,7 +21,7 @@ BenchTraceScene loadBenchTraceScene(const BakeJob& job) {
             s.atlas = std::move(atlases.front());
             // The side the bake's lightmap holds, so the reference traces the same surface.
             if (job.settings.lightmapSide == LightmapSide::Inside)
-                orientLightmapSamples(s.atlas->receivers, s.bvh.view(), s.trace.view());
+                orientLightmapSamples(s.atlas->receivers, s.bvh.view(), s.trace.view(), cameraViewpoints(s.scene));
         }
     }
     if (job.settings.outputs.images) {

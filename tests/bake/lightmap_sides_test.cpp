@@ -8,6 +8,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
+
 using namespace vl;
 using namespace vl::test;
 
@@ -31,14 +33,8 @@ Scene lidOnABlackBox() {
     return scene;
 }
 
-// The lid's lightmap: its covered texels' mean and extremes (green).
-struct LidTexels {
-    double mean = 0.0, lowest = 1e30, highest = -1e30;
-    size_t count = 0;
-};
-
-LidTexels lidTexels(LightmapSide side) {
-    const Scene scene = lidOnABlackBox();
+// The 32² lightmap of the mesh named `mesh`, baked under a uniform sky of radiance 1 alone.
+BakedLightmap meshLightmapUnderSky(const Scene& scene, LightmapSide side, const std::string& mesh) {
     BakeSettings settings = quietSettings();
     settings.sky = vec3(1.0f);
     settings.lightmap.atlasPerMesh = true;
@@ -46,24 +42,94 @@ LidTexels lidTexels(LightmapSide side) {
     settings.lightmapSide = side;
     Diagnostics diagnostics(false, false);
     const BakeResult result = bake(scene, settings, diagnostics);
+    for (const BakedLightmap& lightmap : result.lightmaps)
+        if (lightmap.name.find(mesh) != std::string::npos) return lightmap;
+    FAIL("no lightmap named " << mesh);
+    return {};
+}
+
+// The lid's lightmap: its covered texels' mean and extremes (green).
+struct LidTexels {
+    double mean = 0.0, lowest = 1e30, highest = -1e30;
+    size_t count = 0;
+};
+
+LidTexels lidTexels(LightmapSide side) {
+    const BakedLightmap lightmap = meshLightmapUnderSky(lidOnABlackBox(), side, "lid");
     LidTexels lid;
-    for (const BakedLightmap& lightmap : result.lightmaps) {
-        if (lightmap.name.find("lid") == std::string::npos) continue;
-        for (int y = 0; y < lightmap.mask.height; ++y)
-            for (int x = 0; x < lightmap.mask.width; ++x) {
-                if (lightmap.mask.at(x, y) < 0.5f) continue;
-                const double v = lightmap.total.at(x, y, 1);
-                lid.mean += v;
-                lid.lowest = std::min(lid.lowest, v);
-                lid.highest = std::max(lid.highest, v);
-                ++lid.count;
-            }
-    }
+    for (int y = 0; y < lightmap.mask.height; ++y)
+        for (int x = 0; x < lightmap.mask.width; ++x) {
+            if (lightmap.mask.at(x, y) < 0.5f) continue;
+            const double v = lightmap.total.at(x, y, 1);
+            lid.mean += v;
+            lid.lowest = std::min(lid.lowest, v);
+            lid.highest = std::max(lid.highest, v);
+            ++lid.count;
+        }
     if (lid.count) lid.mean /= double(lid.count);
     return lid;
 }
 
+// A black room [−1, 1] × [0, 2] × [−1, 1] whose faces are wound outward, as exporters leave some
+// rooms (from within, every wall is a back face, as a closed solid's inside is), with a 1 m
+// skylight in its ceiling and a camera in it. On its floor, 1 cm up, lies a double-sided rug
+// wound facing down. The room is seen from within: the rug's lightmap must hold its top.
+Scene rugInARoomWoundOutward() {
+    Scene scene;
+    const int black = addLambert(scene, vec3(0.0f));
+    const int rug = addLambert(scene, vec3(0.5f));
+    scene.materials[size_t(black)].doubleSided = true;
+    scene.materials[size_t(rug)].doubleSided = true;
+    const float s = 1.0f, h = 2.0f, w = 0.5f;  // half width, height, the skylight's half width
+    const vec3 p000(-s, 0, -s), p100(s, 0, -s), p010(-s, h, -s), p110(s, h, -s);
+    const vec3 p001(-s, 0, s), p101(s, 0, s), p011(-s, h, s), p111(s, h, s);
+    // Each quad's corners counter-clockwise seen from outside the room.
+    addQuad(scene, "floor", black, p000, p100, p101, p001);
+    addQuad(scene, "wall-x", black, p000, p001, p011, p010);
+    addQuad(scene, "wall+x", black, p100, p110, p111, p101);
+    addQuad(scene, "wall-z", black, p000, p010, p110, p100);
+    addQuad(scene, "wall+z", black, p001, p101, p111, p011);
+    // The ceiling round the skylight, normals +Y.
+    addQuad(scene, "ceiling-z", black, {-s, h, -s}, {-s, h, -w}, {s, h, -w}, {s, h, -s});
+    addQuad(scene, "ceiling+z", black, {-s, h, w}, {-s, h, s}, {s, h, s}, {s, h, w});
+    addQuad(scene, "ceiling-x", black, {-s, h, -w}, {-s, h, w}, {-w, h, w}, {-w, h, -w});
+    addQuad(scene, "ceiling+x", black, {w, h, -w}, {w, h, w}, {s, h, w}, {s, h, -w});
+    const float y = 0.01f, r = 0.4f;
+    addQuad(scene, "rug", rug, {-r, y, -r}, {r, y, -r}, {r, y, r}, {-r, y, r});  // normal −Y
+    Camera camera;
+    camera.position = vec3(0.0f, 1.0f, 0.9f);
+    camera.forward = vec3(0.0f, 0.0f, -1.0f);
+    scene.cameras.push_back(camera);
+    return scene;
+}
+
 }  // namespace
+
+TEST_CASE("A rug in a room wound outward: inside holds the top its camera sees, lit through the skylight", "[bake]") {
+    // The top sees the sky only through the skylight, a centred square of half width a at
+    // height d: at the rug's centre the texel is L × the form factor 4 F(a/d, a/d), with
+    // F(X, Y) = [X/√(1+X²) atan(Y/√(1+X²)) + Y/√(1+Y²) atan(X/√(1+Y²))] / 2π.
+    const double a = 0.5, d = 2.0 - 0.01, X = a / d, q = std::sqrt(1.0 + X * X);
+    const double centre = 4.0 * 2.0 * X / q * std::atan(X / q) / (2.0 * 3.14159265358979);  // 0.0742
+    const Scene scene = rugInARoomWoundOutward();
+    for (LightmapSide side : {LightmapSide::Front, LightmapSide::Inside}) {
+        const BakedLightmap lightmap = meshLightmapUnderSky(scene, side, "rug");
+        // The middle 4 × 4 texels: 10 cm across, where the form factor changes by < 1%.
+        double sum = 0.0;
+        size_t count = 0;
+        for (int y = 14; y < 18; ++y)
+            for (int x = 14; x < 18; ++x) {
+                sum += lightmap.total.at(x, y, 1);
+                ++count;
+            }
+        const double mean = sum / double(count);
+        INFO(toString(side) << ": centre " << mean << ", the skylight's form factor " << centre);
+        if (side == LightmapSide::Front)
+            CHECK(mean < 0.01 * centre);  // the underside, a centimetre over a black floor
+        else
+            CHECK(mean == Approx(centre).epsilon(0.05));
+    }
+}
 
 TEST_CASE("A double-sided lid on a black box: inside holds its dark underside, front its sunlit top", "[bake]") {
     const LidTexels front = lidTexels(LightmapSide::Front), inside = lidTexels(LightmapSide::Inside);
