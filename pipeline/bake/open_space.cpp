@@ -2,7 +2,11 @@
 
 #include "core/aabb.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 namespace vl {
@@ -19,19 +23,24 @@ OpenSpace::OpenSpace(const TraceSceneView& scene, const std::vector<Viewpoint>& 
     for (int a = 0; a < 3; ++a) dims_[a] = int(std::ceil(extent[a] / cell_)) + 2;
     state_.assign(size_t(dims_[0]) * size_t(dims_[1]) * size_t(dims_[2]), 0);
 
-    // Points on each triangle no more than a third of a cell apart along its edges.
+    // Points on each triangle no more than a third of a cell apart along its edges; triangles in
+    // parallel, each cell's mark a relaxed atomic store (any order leaves the same marks).
     const float spacing = cell_ / 3.0f;
-    for (uint32_t t = 0; t < scene.triangleCount; ++t) {
-        const vec3* v = scene.vertices + 3 * size_t(t);
-        const float edge = std::max(glm::length(v[1] - v[0]), std::max(glm::length(v[2] - v[1]), glm::length(v[0] - v[2])));
-        const int steps = std::max(1, int(std::ceil(edge / spacing)));
-        for (int i = 0; i <= steps; ++i)
-            for (int j = 0; i + j <= steps; ++j) {
-                const float a = float(i) / float(steps), b = float(j) / float(steps);
-                const int64_t k = index(v[0] + a * (v[1] - v[0]) + b * (v[2] - v[0]));
-                if (k >= 0) state_[size_t(k)] = 1;
-            }
-    }
+    std::vector<std::atomic<uint8_t>> crossed(state_.size());
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, scene.triangleCount), [&](const tbb::blocked_range<uint32_t>& range) {
+        for (uint32_t t = range.begin(); t < range.end(); ++t) {
+            const vec3* v = scene.vertices + 3 * size_t(t);
+            const float edge = std::max(glm::length(v[1] - v[0]), std::max(glm::length(v[2] - v[1]), glm::length(v[0] - v[2])));
+            const int steps = std::max(1, int(std::ceil(edge / spacing)));
+            for (int i = 0; i <= steps; ++i)
+                for (int j = 0; i + j <= steps; ++j) {
+                    const float a = float(i) / float(steps), b = float(j) / float(steps);
+                    const int64_t k = index(v[0] + a * (v[1] - v[0]) + b * (v[2] - v[0]));
+                    if (k >= 0) crossed[size_t(k)].store(1, std::memory_order_relaxed);
+                }
+        }
+    });
+    for (size_t k = 0; k < state_.size(); ++k) state_[k] = crossed[k].load(std::memory_order_relaxed);
 
     // Face-to-face from every viewpoint's free cell.
     std::vector<int64_t> frontier;
