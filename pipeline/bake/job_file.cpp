@@ -362,7 +362,7 @@ void readSky(const json& object, BakeSettings& settings, const std::string& wher
 std::string sceneOutputName(const std::string& scenePath) { return fs::path(scenePath).stem().string(); }
 
 std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& defaults,
-                                 const std::string& defaultOutputRoot) {
+                                 const std::string& defaultOutputRoot, const SettingAssignments& command) {
     const json root = readJson(path, "job file");
     if (root.is_object()) checkKeys(root, kJobKeys, path, {inScene(), inSettings()}, " at the top level");
     if (!root.is_object() || !root.contains("scenes") || !root["scenes"].is_array() || root["scenes"].empty())
@@ -401,6 +401,7 @@ std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& de
             // Mesh names belong to one scene: a scene's list replaces the global one ([] for none).
             if (entry.contains("atlases"))
                 job.settings.lightmap.atlases = readAtlasGroups(entry["atlases"], where + ".atlases");
+            for (const auto& [name, value] : command) applySetting(bakeSettingsTable(), job.settings, name, value);
             job.settings.lightmap.validate();
 
             // The scene's folder: <output folder>/<name> (its file's stem by default), or its

@@ -537,7 +537,7 @@ TEST_CASE("A bake job writes every output, the report and nothing half-finished"
         CHECK(entry.path().filename().string().find(".partial") == std::string::npos);
 }
 
-TEST_CASE("Job files set settings globally and per scene and add lights", "[bake]") {
+TEST_CASE("Job files set settings globally and per scene, under the command line's, and add lights", "[bake]") {
     const fs::path dir = tempDir("job-file");
     const fs::path path = dir / "job.json";
     {
@@ -560,6 +560,15 @@ TEST_CASE("Job files set settings globally and per scene and add lights", "[bake
     REQUIRE(jobs[1].addedLights.size() == 1);
     CHECK(jobs[1].addedLights[0].position == vec3(1, 2, 3));
     CHECK(jobs[1].addedLights[0].intensity == 5.0f);
+
+    // The command line's settings apply over the file's, global and per scene; the rest stay the file's.
+    const std::vector<BakeJob> overridden = readJobFile(path.string(), BakeSettings{}, "output", {{"cones", "12"}});
+    REQUIRE(overridden.size() == 2);
+    CHECK(overridden[0].settings.cone.coneCount == 12);
+    CHECK(overridden[1].settings.cone.coneCount == 12);
+    CHECK(overridden[1].settings.voxel.resolution == 64);
+    CHECK_FALSE(overridden[1].settings.outputs.images);
+    CHECK_THROWS_WITH(readJobFile(path.string(), BakeSettings{}, "output", {{"cones", "many"}}), Catch::Contains("cones"));
 
     std::ofstream(dir / "bad.json") << R"({"scenes": [{"path": "a.gltf", "settings": {"cones": "x"}}]})";
     CHECK_THROWS_WITH(readJobFile((dir / "bad.json").string(), BakeSettings{}, "output"),

@@ -70,6 +70,7 @@ int main(int argc, char** argv) {
         std::string outDir;
         BakeSettings settings;
         settings.quiet = true;
+        SettingAssignments assignments;
         for (int i = 2; i < argc; ++i) {
             const std::string arg = argv[i];
             if (arg == "-o" && i + 1 < argc) {
@@ -78,11 +79,12 @@ int main(int argc, char** argv) {
             }
             const size_t eq = arg.find('=');
             if (eq == std::string::npos) throw SettingsError("not name=value: " + arg);
-            applySetting(bakeSettingsTable(), settings, arg.substr(0, eq), arg.substr(eq + 1));
+            assignments.emplace_back(arg.substr(0, eq), arg.substr(eq + 1));
+            applySetting(bakeSettingsTable(), settings, assignments.back().first, assignments.back().second);
         }
         BakeJob job;
         if (fs::path(input).extension() == ".json") {
-            const std::vector<BakeJob> jobs = readJobFile(input, settings, "output");
+            const std::vector<BakeJob> jobs = readJobFile(input, settings, "output", assignments);
             if (jobs.empty()) throw InputError(input + ": no scenes");
             job = jobs.front();
         } else {

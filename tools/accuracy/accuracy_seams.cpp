@@ -53,15 +53,17 @@ int main(int argc, char** argv) {
         const std::string input = argv[1];
         BakeSettings settings;
         settings.quiet = true;
+        SettingAssignments assignments;
         for (int i = 2; i < argc; ++i) {
             const std::string arg = argv[i];
             const size_t eq = arg.find('=');
             if (eq == std::string::npos) throw SettingsError("not name=value: " + arg);
-            applySetting(bakeSettingsTable(), settings, arg.substr(0, eq), arg.substr(eq + 1));
+            assignments.emplace_back(arg.substr(0, eq), arg.substr(eq + 1));
+            applySetting(bakeSettingsTable(), settings, assignments.back().first, assignments.back().second);
         }
         BakeJob job;
         if (fs::path(input).extension() == ".json") {
-            const std::vector<BakeJob> jobs = readJobFile(input, settings, "output");
+            const std::vector<BakeJob> jobs = readJobFile(input, settings, "output", assignments);
             if (jobs.empty()) throw InputError(input + ": no scenes");
             job = jobs.front();
         } else {

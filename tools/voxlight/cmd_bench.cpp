@@ -79,7 +79,7 @@ BenchOptions plan(const BenchCliOptions& o) {
     if (input.empty())
         input = fs::exists(refDir + "/cornell_quad.gltf") ? refDir + "/cornell_quad.gltf" : defaultScenePath();
     if (fs::path(input).extension() == ".json") {
-        std::vector<BakeJob> jobs = readJobFile(input, settings, "output");
+        std::vector<BakeJob> jobs = readJobFile(input, settings, "output", o.settings);
         if (jobs.empty()) throw InputError(input + ": the job file names no scene");
         options.base = std::move(jobs.front());
         if (jobs.size() > 1)
