@@ -135,7 +135,7 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
     rowBegin = std::clamp(rowBegin, 0, H);
     rowEnd = std::clamp(rowEnd, rowBegin, H);
     if (rowBegin == rowEnd || mips.levelCount <= 0) return out;
-    const int s = out.spacing = texelGatherSpacing(atlas, mips.voxelSize, settings);
+    const int s = texelGatherSpacing(atlas, mips.voxelSize, settings);
     const float texelSize = std::max(texelWorldSize(atlas), 1e-6f);
     const float reach = kRecordReach * float(s) * texelSize;
     const int half = s / 2;
@@ -166,7 +166,7 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
             node[size_t(j - jBegin) * size_t(columns) + size_t(i)] = int32_t(records.size());
             records.push_back(r);
         }
-    const size_t latticeRecords = out.records = records.size();
+    const size_t latticeRecords = records.size();
     gatherRecords(records, 0, W, mips, faces, bright, bvh, scene, settings);
     const auto nodeAt = [&](int i, int j) -> int32_t {
         if (i < 0 || i >= columns || j < jBegin || j >= jEnd) return -1;
@@ -295,7 +295,6 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
         blockFirst[b] = records.size();
         records.insert(records.end(), blockRecords[b].begin(), blockRecords[b].end());
     }
-    out.ownRecords = records.size() - latticeRecords;
     gatherRecords(records, latticeRecords, W, mips, faces, bright, bvh, scene, settings);
 
     // Each sample: its lattice records, bilinearly, else its block's record.

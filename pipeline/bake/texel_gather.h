@@ -44,9 +44,6 @@ struct TexelGatherSettings {
 struct TexelGather {
     Image indirect;  // RGB E_indirect / π per covered texel (W/(m²·sr), the lightmap's convention)
     Image sky;       // RGB E_sky / π: the sky's direct light
-    int spacing = 0;
-    size_t records = 0;     // lattice records gathered (the band's and the filter's margin)
-    size_t ownRecords = 0;  // records of samples no lattice record applies to
 };
 
 // Covered texels of rows [rowBegin, rowEnd); other texels 0. A texel's value does not depend on
