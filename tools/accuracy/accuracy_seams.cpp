@@ -8,6 +8,7 @@
 //   build/accuracy/accuracy_seams SCENE.gltf|JOB.json [name=value …]
 //
 // Bake settings as name=value (the bake's flags without --).
+#include "accuracy_job.h"
 #include "bake/bake.h"
 #include "bake/bake_job.h"
 #include "bake/job_file.h"
@@ -51,25 +52,14 @@ int main(int argc, char** argv) {
     }
     try {
         const std::string input = argv[1];
-        BakeSettings settings;
-        settings.quiet = true;
         SettingAssignments assignments;
         for (int i = 2; i < argc; ++i) {
             const std::string arg = argv[i];
             const size_t eq = arg.find('=');
             if (eq == std::string::npos) throw SettingsError("not name=value: " + arg);
             assignments.emplace_back(arg.substr(0, eq), arg.substr(eq + 1));
-            applySetting(bakeSettingsTable(), settings, assignments.back().first, assignments.back().second);
         }
-        BakeJob job;
-        if (fs::path(input).extension() == ".json") {
-            const std::vector<BakeJob> jobs = readJobFile(input, settings, "output", assignments);
-            if (jobs.empty()) throw InputError(input + ": no scenes");
-            job = jobs.front();
-        } else {
-            job.scenePath = input;
-            job.settings = settings;
-        }
+        BakeJob job = accuracyJob(input, assignments);
         job.settings.quiet = true;
         job.settings.outputs.grids = false;
 

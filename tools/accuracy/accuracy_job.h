@@ -1,0 +1,30 @@
+// The accuracy tools' first argument, a job file (its first scene) or a glTF scene, with the
+// command line's name=value settings applied over it (as `voxlight bake` applies them).
+#pragma once
+
+#include "bake/bake_job.h"
+#include "bake/bake_settings.h"
+#include "bake/job_file.h"
+#include "core/error.h"
+
+#include <string>
+#include <vector>
+
+namespace vl {
+
+inline BakeJob accuracyJob(const std::string& input, const SettingAssignments& assignments) {
+    BakeSettings settings;
+    settings.quiet = true;
+    for (const auto& [name, value] : assignments) applySetting(bakeSettingsTable(), settings, name, value);
+    if (input.size() > 5 && input.compare(input.size() - 5, 5, ".json") == 0) {
+        const std::vector<BakeJob> jobs = readJobFile(input, settings, "output", assignments);
+        if (jobs.empty()) throw InputError(input + ": no scenes");
+        return jobs.front();
+    }
+    BakeJob job;
+    job.scenePath = input;
+    job.settings = settings;
+    return job;
+}
+
+}  // namespace vl
