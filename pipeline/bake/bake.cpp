@@ -270,7 +270,7 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
     // bright patches send from.
     const bool finalGather = settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images);
     const bool needPoints = settings.lighting.visibilityBy == VoxelVisibility::Rays ||
-                            (finalGather && settings.brightPatches.factor > 0.0f);
+                            (finalGather && gatherBrightPatches(settings, sceneView.lightCount > 0).factor > 0.0f);
     const VoxelSurfacePoints surfacePoints = timed(result.stages, "surface points", [&] {
         return needPoints ? voxelSurfacePoints(result.voxels, sceneView, settings.lighting.surfacePoints)
                           : VoxelSurfacePoints{};
@@ -346,7 +346,9 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
         timed(result.stages, "gather", [&] {
             // The bright patches leave the light the gather reads (the rays read faces, the
             // cones the mips), and come back after.
-            stages.bright = splitBrightPatches(result.voxels, surfacePoints, settings.brightPatches);
+            stages.bright = splitBrightPatches(result.voxels, surfacePoints, gatherBrightPatches(settings, sceneView.lightCount > 0));
+            if (takesLightsAtHits(settings, sceneView.lightCount > 0))
+                stages.bright.lightsAtHits = punctualFaceRadiance(result.voxels, surfacePoints, sceneView, bvhView);
             const BrightPatchSplit& split = stages.bright;
             result.brightPatches = split.patches.size();
             const bool relight = !split.patches.empty() && !byRays;
@@ -479,6 +481,7 @@ ReceiverLighting ReceiverShading::shadeAtlasRows(const LightmapAtlas& given, int
         texels.direct = direct;
         texels.direct.skyAtSamples = false;
         texels.gatherSky = skyInRecords;
+        if (!bright_.lightsAtHits.empty()) texels.lightsAtHits = &bright_.lightsAtHits;
         const TexelGather gathered = gatherAtlasTexels(atlas, rowBegin, rowEnd, &lit.direct, mipView_, bright_.restFaces,
                                                        bright_, tracing_.bvh.view(), tracing_.traceScene.view(), texels);
         for (size_t k = 0; k < lit.direct.pixels.size(); ++k) lit.direct.pixels[k] += gathered.sky.pixels[k];

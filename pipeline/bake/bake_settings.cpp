@@ -153,6 +153,11 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
                                      " must be a texel size in metres from 1e-6 to 1e6 (or 0: none)");
              s.lightmap.texelSize = texel;
          }},
+        {"hit-light", "how a lightmap record's ray that hits a surface takes the punctual lights' light there: voxels (its voxel's face light, which a shaded point shares with a sunlit one beside it in the same voxel) or exact (a shadow ray from the hit point, with voxel-visibility rays; in a scene with punctual lights the bright patches are then off) (default exact)",
+         [](S& s, const std::string& v) {
+             if (v != "voxels" && v != "exact") throw SettingsError("setting hit-light = '" + v + "' is not one of voxels, exact");
+             s.hitLightExact = v == "exact";
+         }},
         {"lightmap-stitch", "stitch lightmap chart seams: where one surface is split between two charts, move the texels on both sides by a small least-squares solve so they read one value along the split (default true)",
          [](S& s, const std::string& v) { s.lightmapStitch = parseBoolSetting("lightmap-stitch", v); }},
         {"lightmap-subsamples", "n × n sub-texel probes per texel (default 4)",
@@ -219,6 +224,16 @@ ConeSettings bounceConeSettings(const BakeSettings& settings) {
     ConeSettings bounce = settings.cone;
     bounce.coneCount = settings.bounceCones;
     return bounce;
+}
+
+bool takesLightsAtHits(const BakeSettings& settings, bool punctualLights) {
+    return settings.hitLightExact && punctualLights && settings.lighting.visibilityBy == VoxelVisibility::Rays;
+}
+
+BrightPatchSettings gatherBrightPatches(const BakeSettings& settings, bool punctualLights) {
+    BrightPatchSettings patches = settings.brightPatches;
+    if (takesLightsAtHits(settings, punctualLights)) patches.factor = 0.0f;
+    return patches;
 }
 
 void validateBakeSettings(const BakeSettings& s) {
@@ -290,6 +305,7 @@ std::string describeBakeSettings(const BakeSettings& s) {
     if (s.lambertMaterials) out << ", materials=lambert";
     if (s.lightmapSide != LightmapSide::Inside) out << ", lightmap-side=" << toString(s.lightmapSide);
     if (!s.lightmapStitch) out << ", lightmap-stitch=false";
+    if (!s.hitLightExact) out << ", hit-light=voxels";
     if (s.filesOutsideScene) out << ", files-outside-scene=true";
     if (!s.voxel.ownFrame) out << ", grid-frame=world";
     for (size_t g = 0; g < s.lightmap.atlases.size(); ++g) {

@@ -120,6 +120,11 @@ struct BakeSettings {
     // Chart seams stitched after dilation (bake/lightmap_seams.h): the two sides of a surface
     // split between charts read one value, so the viewer shows no line there.
     bool lightmapStitch = true;
+    // hit-light exact: the lightmap records' rays take the punctual lights' reflection at their
+    // hits by a shadow ray, not from the hit's voxel (whose face averages shaded and sunlit
+    // surfaces a few centimetres apart); with punctual lights the bright patches are then off.
+    // docs/accuracy.md.
+    bool hitLightExact = true;
     DirectLightSettings direct;
     // A uniform sky's radiance, W/(m²·sr) (scene.h Sky; glTF has none): zero, no sky.
     vec3 sky{0.0f};
@@ -152,6 +157,13 @@ const SettingsTable<BakeSettings>& bakeSettingsTable();
 ConeSettings bounceConeSettings(const BakeSettings& settings);
 
 // Checks every range (SettingsError naming the setting); runs before any work.
+// Whether the lightmap records' rays take the punctual lights at their hits: hit-light exact,
+// in a scene with punctual lights, lit by voxel-visibility rays (whose lights it takes apart).
+bool takesLightsAtHits(const BakeSettings& settings, bool punctualLights);
+// The bright patches the final gather splits off: the settings', none where the rays take the
+// lights at their hits.
+BrightPatchSettings gatherBrightPatches(const BakeSettings& settings, bool punctualLights);
+
 void validateBakeSettings(const BakeSettings& settings);
 
 // "name=value, …" of every setting, for reports and file metadata.

@@ -57,6 +57,9 @@ struct BrightPatchSplit {
     size_t faces = 0;                        // voxel faces taken into the patches
     std::vector<FaceRadiance> restFaces;     // the voxels' face radiance less those faces
     std::vector<vec3> restRadiance;          // faceWeightedMean of restFaces
+    // hit-light exact (no patches then): the punctual lights' part of restFaces, which the
+    // lightmap records' rays take at their hit points instead (bake/ray_gather.h FanExtras).
+    std::vector<FaceRadiance> lightsAtHits;
 };
 
 // Empty patches (and rest = the voxels' own light) when factor ≤ 0 or the voxels have no face

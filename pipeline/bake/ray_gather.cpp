@@ -7,8 +7,10 @@
 #include "cone/cone_trace.h"
 #include "core/error.h"
 #include "core/progress.h"
+#include "core/rng.h"
 #include "core/sampling.h"
 #include "trace/bvh_traverse.h"
+#include "trace/path_kernels.h"
 #include "trace/ray_offset.h"
 
 #include <tbb/blocked_range.h>
@@ -177,6 +179,16 @@ HitLookup hitLookup(const MipLevelView& level0, size_t voxels) {
     return lookup;
 }
 
+// The lights' (punctual) direct light the hit point reflects back along the ray: shadowed,
+// × its albedo / π, on the side the ray meets; a sun's disk at one point drawn from `draws`.
+vec3 lightsReflectedAt(const TraceSceneView& scene, const BvhView& bvh, const Ray& ray, const Hit& hit, Pcg32& draws) {
+    const SurfaceHit h = surfaceAt(scene, hit.triangle, hit.b1, hit.b2);
+    const vec3 side = glm::dot(h.geometricNormal, ray.direction) < 0.0f ? h.geometricNormal : -h.geometricNormal;
+    vec2 u;
+    draws.next2D(u.x, u.y);
+    return baseColorAt(scene, h) * kInvPi * punctualIrradiance(scene, bvh, h.position, side, side, u);
+}
+
 }  // namespace
 
 std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& mips,
@@ -194,10 +206,12 @@ std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& m
     const float rays = float(pattern.size());
     const HitLookup level0 = hitLookup(mips.levels[0], faces.size());
     const bool sky = extras && extras->readSky && scene.sky.present();
+    const std::vector<FaceRadiance>* lights = extras && scene.lightCount > 0 ? extras->lightsAtHits : nullptr;
     const float imageDraws = scene.sky.samplable() ? float(skyDrawsPerAxis * skyDrawsPerAxis) : 0.0f;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, fans.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
         IndexLeafCache leaves;
         for (size_t q = range.begin(); q != range.end(); ++q) {
+            Pcg32 lightDraws = Pcg32::forItem(fans[q].seed, 0, 0x48495453ull);  // "HITS": the suns' disk points
             vec3 sum(0.0f), open(0.0f);
             double squares = 0.0, values = 0.0;  // of every ray's radiance, the sky's too
             uint32_t escaped = 0;
@@ -224,7 +238,9 @@ std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& m
                     readHitTexels(level0, leaves, ray.at(hit.t), ray.direction, windingCross(scene, hit.triangle),
                                   [&](int32_t voxel, int travel, float weight) {
                                       L += weight * faces[size_t(voxel)][size_t(travel ^ 1)];
+                                      if (lights) L -= weight * (*lights)[size_t(voxel)][size_t(travel ^ 1)];
                                   });
+                    if (lights) L = glm::max(L, vec3(0.0f)) + lightsReflectedAt(scene, bvh, ray, hit, lightDraws);
                     sum += L;
                     const double l = (double(L.x) + double(L.y) + double(L.z)) / 3.0;
                     squares += l * l;

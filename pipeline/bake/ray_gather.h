@@ -89,6 +89,11 @@ struct FanStart {
 // (mean channel), from the spread of the rays' radiance, and the rays that left the scene.
 struct FanExtras {
     bool readSky = true;  // set by the caller: false leaves the sky out of `sky` and `variance`
+    // Set by the caller (hit-light exact): the lights' own first reflection within `faces`
+    // (lighting/surface_light.h punctualFaceRadiance). Each hit reads the faces less it and
+    // takes the lights' reflection at the hit point by a shadow ray: a shaded point no longer
+    // reads the sunlit surface that shares its voxel.
+    const std::vector<FaceRadiance>* lightsAtHits = nullptr;
     std::vector<vec3> sky;
     std::vector<float> variance;
     std::vector<uint32_t> escaped;

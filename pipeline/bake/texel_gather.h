@@ -39,6 +39,7 @@ struct TexelGatherSettings {
     bool gatherSky = true;     // the records gather the sky's direct light; false: the caller lights samples by it
     int skyDrawsPerAxis = 10;  // under an image sky, draws from its image per record (n × n)
     DirectLightSettings direct;  // the direct light that tells a record is open (lights, emitters: no sky)
+    const std::vector<FaceRadiance>* lightsAtHits = nullptr;  // hit-light exact (bake/ray_gather.h FanExtras)
 };
 
 struct TexelGather {

@@ -1,6 +1,7 @@
 #include "cluster/voxel_state.h"
 
 #include "cluster/unit_file.h"
+#include "lighting/surface_light.h"
 #include "lighting/surface_points.h"
 #include "bake/gather_visibility.h"
 #include "bake/ray_gather.h"
@@ -249,10 +250,14 @@ RebuiltGather rebuildGather(const VoxelState& state, const ReceiverScene& tracin
                              " gathered points, its voxels give " + std::to_string(gather.cache.points().size()));
         gather.cache.setIrradiance(state.gatheredIrradiance);
         if (byRays) gather.cache.setRaysPerAxis(gatherRaysPerAxis);
-        const bool needPoints = settings.brightPatches.factor > 0.0f;
-        gather.bright = splitBrightPatches(
-            voxels, needPoints ? voxelSurfacePoints(voxels, tracing.traceScene.view(), settings.lighting.surfacePoints) : VoxelSurfacePoints{},
-            settings.brightPatches);
+        const BrightPatchSettings patches = gatherBrightPatches(settings, tracing.traceScene.view().lightCount > 0);
+        const bool lightsAtHits = takesLightsAtHits(settings, tracing.traceScene.view().lightCount > 0);
+        const bool needPoints = patches.factor > 0.0f || lightsAtHits;
+        const VoxelSurfacePoints points =
+            needPoints ? voxelSurfacePoints(voxels, tracing.traceScene.view(), settings.lighting.surfacePoints) : VoxelSurfacePoints{};
+        gather.bright = splitBrightPatches(voxels, points, patches);
+        if (lightsAtHits)
+            gather.bright.lightsAtHits = punctualFaceRadiance(voxels, points, tracing.traceScene.view(), tracing.bvh.view());
     }
     return gather;
 }

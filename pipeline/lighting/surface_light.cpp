@@ -89,4 +89,14 @@ SurfaceLightStats lightVoxelsByRays(VoxelScene& voxels, const VoxelSurfacePoints
     return stats;
 }
 
+std::vector<FaceRadiance> punctualFaceRadiance(const VoxelScene& voxels, const VoxelSurfacePoints& points,
+                                               const TraceSceneView& scene, const BvhView& bvh) {
+    if (scene.lightCount == 0) return {};
+    TraceSceneView lightsOnly = scene;
+    lightsOnly.emitterCount = 0;
+    VoxelScene lit = voxels;
+    lightVoxelsByRays(lit, points, lightsOnly, bvh, 0);
+    return std::move(lit.faceRadiance);
+}
+
 }  // namespace vl

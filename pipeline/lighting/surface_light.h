@@ -36,4 +36,10 @@ struct SurfaceLightStats {
 SurfaceLightStats lightVoxelsByRays(VoxelScene& voxels, const VoxelSurfacePoints& points, const TraceSceneView& scene,
                                     const BvhView& bvh, int skyStrata, Progress* progress = nullptr);
 
+// The part of lightVoxelsByRays's faceRadiance that the punctual lights give (no emitters, no
+// sky): what a gather ray that hits can take exactly at its hit point instead (bake setting
+// hit-light exact). Empty when the scene has no punctual light.
+std::vector<FaceRadiance> punctualFaceRadiance(const VoxelScene& voxels, const VoxelSurfacePoints& points,
+                                               const TraceSceneView& scene, const BvhView& bvh);
+
 }  // namespace vl

@@ -492,6 +492,8 @@ TEST_CASE("Absurd settings are refused before any work", "[bake]") {
                       Catch::Contains("aperture") && Catch::Contains("out of range"));
     CHECK_THROWS_WITH(applySetting(bakeSettingsTable(), settings, "cones", "many"), Catch::Contains("not an integer"));
     CHECK_THROWS_WITH(applySetting(bakeSettingsTable(), settings, "colour", "1"), Catch::Contains("unknown setting"));
+    CHECK_THROWS_WITH(applySetting(bakeSettingsTable(), settings, "hit-light", "cones"),
+                      Catch::Contains("hit-light") && Catch::Contains("'cones'") && Catch::Contains("voxels, exact"));
 
     // 10⁹ voxels along an axis: refused by the voxel count check, before voxelizing.
     settings.voxel.voxelSize = 1e-9;
