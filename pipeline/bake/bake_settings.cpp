@@ -90,7 +90,7 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.gatherLevel = parseIntSetting("gather-level", v, -1, kMaxCacheLevel); }},
         {"gather-turns", "cone sets traced per gather point of the final gather, each turned by 1/n turn (default 2)",
          [](S& s, const std::string& v) { s.gatherTurns = parseIntSetting("gather-turns", v, 1, kMaxGatherTurns); }},
-        {"bright-patches", "faces brighter than this many times the mean face are gathered by shadow rays at the gather points, not by cones; 0: none (default 8)",
+        {"bright-patches", "faces brighter than this many times the mean face are gathered by shadow rays at the gather points, not by cones; 0: none; off in a scene with punctual lights under hit-light exact (default 8)",
          [](S& s, const std::string& v) { s.brightPatches.factor = static_cast<float>(parseRealSetting("bright-patches", v, 0, 1e6)); }},
         {"bright-patch-cell", "voxels per axis of the cells whose bright faces merge into one patch (default 8)",
          [](S& s, const std::string& v) { s.brightPatches.cellVoxels = parseIntSetting("bright-patch-cell", v, 1, 1024); }},
