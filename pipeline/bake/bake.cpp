@@ -269,8 +269,10 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
     // Points on the voxels' surfaces: what the voxel pass by rays lights and the final gather's
     // bright patches send from.
     const bool finalGather = settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images);
+    const bool punctualLights = sceneView.lightCount > 0;
+    const BrightPatchSettings brightPatches = gatherBrightPatches(settings, punctualLights);
     const bool needPoints = settings.lighting.visibilityBy == VoxelVisibility::Rays ||
-                            (finalGather && gatherBrightPatches(settings, sceneView.lightCount > 0).factor > 0.0f);
+                            (finalGather && brightPatches.factor > 0.0f);
     const VoxelSurfacePoints surfacePoints = timed(result.stages, "surface points", [&] {
         return needPoints ? voxelSurfacePoints(result.voxels, sceneView, settings.lighting.surfacePoints)
                           : VoxelSurfacePoints{};
@@ -346,8 +348,8 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
         timed(result.stages, "gather", [&] {
             // The bright patches leave the light the gather reads (the rays read faces, the
             // cones the mips), and come back after.
-            stages.bright = splitBrightPatches(result.voxels, surfacePoints, gatherBrightPatches(settings, sceneView.lightCount > 0));
-            if (takesLightsAtHits(settings, sceneView.lightCount > 0))
+            stages.bright = splitBrightPatches(result.voxels, surfacePoints, brightPatches);
+            if (takesLightsAtHits(settings, punctualLights))
                 stages.bright.lightsAtHits = punctualFaceRadiance(result.voxels, surfacePoints, sceneView, bvhView);
             const BrightPatchSplit& split = stages.bright;
             result.brightPatches = split.patches.size();

@@ -156,7 +156,6 @@ const SettingsTable<BakeSettings>& bakeSettingsTable();
 // The cone settings of the voxel-to-voxel bounces: `cone` with bounceCones cones.
 ConeSettings bounceConeSettings(const BakeSettings& settings);
 
-// Checks every range (SettingsError naming the setting); runs before any work.
 // Whether the lightmap records' rays take the punctual lights at their hits: hit-light exact,
 // in a scene with punctual lights, lit by voxel-visibility rays (whose lights it takes apart).
 bool takesLightsAtHits(const BakeSettings& settings, bool punctualLights);
@@ -164,6 +163,7 @@ bool takesLightsAtHits(const BakeSettings& settings, bool punctualLights);
 // lights at their hits.
 BrightPatchSettings gatherBrightPatches(const BakeSettings& settings, bool punctualLights);
 
+// Checks every range (SettingsError naming the setting); runs before any work.
 void validateBakeSettings(const BakeSettings& settings);
 
 // "name=value, …" of every setting, for reports and file metadata.

@@ -8,6 +8,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <array>
 #include <vector>
 
 namespace vl {
@@ -25,11 +26,16 @@ namespace {
 constexpr int kSideRays = 16;     // 4 points × 2 × 2
 constexpr int kClearlyFewer = 4;  // of them
 
-// What 2 × 2 jittered cosine rays about `normal` from each of four points of a triangle (its
-// centroid and the points halfway from it to each corner: a big floor triangle's centroid may
-// lie under a block standing on it) find: rays that leave the scene, rays that meet a triangle
+// What 2 × 2 jittered cosine rays about `normal` from each of a triangle's lookout points find: rays that leave the scene, rays that meet a triangle
 // of the side's own material from behind (a closed solid is one material, as a block is), and
 // rays that meet any triangle from behind.
+// A triangle's centroid and the points halfway from it to each corner: a big floor triangle's
+// centroid may lie under a block standing on it.
+std::array<vec3, 4> lookoutPoints(const vec3* corner) {
+    const vec3 centroid = (corner[0] + corner[1] + corner[2]) / 3.0f;
+    return {centroid, 0.5f * (centroid + corner[0]), 0.5f * (centroid + corner[1]), 0.5f * (centroid + corner[2])};
+}
+
 struct SideView {
     int open = 0, behindOwn = 0, behind = 0;
 };
@@ -38,9 +44,7 @@ SideView lookFrom(const BvhView& bvh, const TraceSceneView& scene, const vec3* c
                   uint32_t material) {
     vec3 t, b;
     orthonormalBasis(normal, t, b);
-    const vec3 centroid = (corner[0] + corner[1] + corner[2]) / 3.0f;
-    const vec3 points[4] = {centroid, 0.5f * (centroid + corner[0]), 0.5f * (centroid + corner[1]),
-                            0.5f * (centroid + corner[2])};
+    const std::array<vec3, 4> points = lookoutPoints(corner);
     SideView view;
     for (const vec3& point : points)
         for (int i = 0; i < 2; ++i)
@@ -64,13 +68,11 @@ SideView lookFrom(const BvhView& bvh, const TraceSceneView& scene, const vec3* c
     return view;
 }
 
-// How many of a triangle's four points (as lookFrom's) have open space on the side `normal`
+// How many of a triangle's lookout points have open space on the side `normal`
 // faces: probed two cells out, or halfway to a surface nearer than that (a gap too thin to
 // stand in, which the grid marks crossed). Two cells clear the triangle's own cells.
 int openPoints(const OpenSpace& space, const BvhView& bvh, const vec3* corner, const vec3& normal) {
-    const vec3 centroid = (corner[0] + corner[1] + corner[2]) / 3.0f;
-    const vec3 points[4] = {centroid, 0.5f * (centroid + corner[0]), 0.5f * (centroid + corner[1]),
-                            0.5f * (centroid + corner[2])};
+    const std::array<vec3, 4> points = lookoutPoints(corner);
     const float reach = 2.0f * space.cellSize();
     int open = 0;
     for (const vec3& point : points) {

@@ -28,8 +28,9 @@
 // texels a side) that holds them. Every chart keeps kPaddingTexels empty texel on each side,
 // so two charts' texels have at least 2 empty texels between them (issue 14's padding): a
 // bilinear lookup at a chart's edge reaches one texel out, which the bake's dilation fills
-// from that chart alone; two a side would cost a small atlas much of its coverage. Vertices shared by two charts are split (every attribute copied;
-// Mesh::Source::vertices says where each came from, for glTF out).
+// from that chart alone; two a side would cost a small atlas much of its coverage. Vertices
+// shared by two charts are split (every attribute copied; Mesh::Source::vertices says where
+// each came from, for glTF out).
 //
 // Why not Blender's Lightmap Pack (one chart per face): a wall of two triangles is then two
 // islands with a seam of padding through it, at a texel density that varies from face to
