@@ -108,6 +108,7 @@ nlohmann::json reportJson(const BakeReport& report, const BakeSettings& settings
                                 {"chart_area_share", uvs.occupancy}, {"max_stretch", uvs.maxStretch},
                                 {"mean_stretch", uvs.meanStretch}, {"small_charts", nlohmann::json::array()}};
         if (uvs.askedTexelSize > 0.0) json["lightmap_uvs"]["texel_size_asked"] = uvs.askedTexelSize;
+        json["lightmap_uvs"]["merged_across_creases"] = uvs.mergedAcrossCreases;
         // Charts under kSmallChartTexels a side that no neighbour could take, per mesh.
         for (const SmallCharts& small : uvs.smallCharts)
             json["lightmap_uvs"]["small_charts"].push_back({{"mesh", small.mesh}, {"charts", small.charts}});

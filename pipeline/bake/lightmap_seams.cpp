@@ -179,6 +179,8 @@ std::vector<LightmapSeam> findLightmapSeams(const Scene& scene, const std::vecto
         if (!(length > 1e-6f) || !(std::abs(cross) > 1e-6f * length)) return false;
         side.inward = vec2(-edge.y, edge.x) / length;
         if (cross < 0.0f) side.inward = -side.inward;
+        side.mesh = use.mesh;
+        side.triangle = use.triangle;
         return true;
     };
 

@@ -31,13 +31,14 @@
 
 #include "core/image.h"
 #include "scene/scene.h"
+#include "unwrap/lightmap_uvs.h"
 
 #include <cstdint>
 #include <vector>
 
 namespace vl {
 
-constexpr float kSeamNormalDegrees = 15.0f;
+constexpr float kSeamNormalDegrees = kSmoothShadingDegrees;  // unwrap/lightmap_uvs.h: one rule for smooth
 constexpr float kSeamInsetTexels = 0.5f;
 // λ against the pairs' weight 1: the smaller, the closer the seams come to one value (the
 // grey-white room: 2.0 % at 0.05, 1.2 % at 0.01, 0.9 % at 0.002, each step costing more
@@ -50,6 +51,7 @@ constexpr double kStitchPaddingWeight = 0.0004;
 struct SeamSide {
     vec2 a{0.0f}, b{0.0f};
     vec2 inward{0.0f};
+    uint32_t mesh = 0, triangle = 0;  // the triangle it reads into (Scene::meshes, the mesh's own index)
 };
 
 struct LightmapSeam {

@@ -82,6 +82,7 @@ void writeVoxelState(const VoxelStages& stages, size_t triangles, const std::vec
                              {"charts", u.charts},       {"texel_size", u.texelSize},    {"occupancy", u.occupancy},
                              {"max_stretch", u.maxStretch}, {"mean_stretch", u.meanStretch}, {"seconds", u.seconds},
                              {"grown_charts", u.grownCharts}, {"asked_texel_size", u.askedTexelSize},
+                             {"merged_across_creases", u.mergedAcrossCreases},
                              {"small_charts", json::array()}};
         for (const SmallCharts& small : u.smallCharts)
             h["lightmap_uvs"]["small_charts"].push_back({{"mesh", small.mesh}, {"charts", small.charts}});
@@ -163,6 +164,7 @@ VoxelState readVoxelState(const std::string& path) {
         uvs.seconds = u.at("seconds").get<double>();
         uvs.grownCharts = u.value("grown_charts", uvs.charts);
         uvs.askedTexelSize = u.value("asked_texel_size", 0.0);
+        uvs.mergedAcrossCreases = u.value("merged_across_creases", false);
         for (const json& small : u.value("small_charts", json::array()))
             uvs.smallCharts.push_back({small.at("mesh").get<std::string>(), small.at("charts").get<size_t>()});
         r.lightmapUvs = uvs;

@@ -102,6 +102,23 @@ Topology meshTopology(const Mesh& mesh) {
     return topo;
 }
 
+// Whether triangles t and u, which share the edge between welded vertices a and b, meet at a
+// hard crease: folded by more than acos(minFoldCos), and shaded apart there (their vertex
+// normals at an end differ by more than kSmoothShadingDegrees, or the mesh has none). A
+// smooth-shaded fold is lit as one surface and may stay inside a chart.
+bool hardCrease(const Topology& topo, uint32_t t, uint32_t u, uint32_t a, uint32_t b, float minFoldCos) {
+    if (glm::dot(topo.normal[t], topo.normal[u]) >= minFoldCos) return false;
+    const Mesh& mesh = *topo.mesh;
+    if (mesh.normals.size() != mesh.positions.size()) return true;
+    const float smooth = std::cos(glm::radians(kSmoothShadingDegrees));
+    const auto normalAt = [&](uint32_t triangle, uint32_t welded) {
+        for (int k = 0; k < 3; ++k)
+            if (topo.corner(triangle, k) == welded) return mesh.normals[mesh.indices[3 * size_t(triangle) + size_t(k)]];
+        return vec3(0.0f);
+    };
+    return glm::dot(normalAt(t, a), normalAt(u, a)) < smooth || glm::dot(normalAt(t, b), normalAt(u, b)) < smooth;
+}
+
 struct Chart {
     uint32_t mesh = 0;
     std::vector<uint32_t> triangles;  // the mesh's
@@ -514,8 +531,11 @@ void splitWasteful(const Topology& topo, Chart chart, double s, std::vector<Char
 class ChartMerger {
 public:
     // s: about the texel size the charts will be packed at; lengthCap: see kMergeLengthShare.
-    ChartMerger(const Topology& topo, std::vector<Chart>& charts, double lengthCap, double s)
-        : topo_(topo), charts_(charts), lengthCap_(lengthCap), texel_(s), localOf_(topo.welded.size(), -1) {}
+    // keepCreases: charts meeting along a hard crease do not merge (kMergeFoldDegrees).
+    ChartMerger(const Topology& topo, std::vector<Chart>& charts, double lengthCap, double s, bool keepCreases)
+        : topo_(topo), charts_(charts), lengthCap_(lengthCap), texel_(s), localOf_(topo.welded.size(), -1) {
+        keepCreases_ = keepCreases;
+    }
 
     void run() {
         const size_t n = charts_.size();
@@ -524,6 +544,7 @@ public:
         neighbours_.assign(n, {});
         rectangles_.resize(n);
         std::vector<uint32_t> chartOf(topo_.area.size());
+        const float minFoldCos = std::cos(glm::radians(kMergeFoldDegrees));
         for (uint32_t c = 0; c < n; ++c) {
             for (uint32_t t : charts_[c].triangles) chartOf[t] = c;
             rectangles_[c] = smallestRectangle(charts_[c].coords);
@@ -538,6 +559,8 @@ public:
                     if (chartOf[other] != chartOf[t]) {
                         neighbours_[chartOf[t]][chartOf[other]] += length;
                         neighbours_[chartOf[other]][chartOf[t]] += length;
+                        if (keepCreases_ && hardCrease(topo_, t, other, a, b, minFoldCos))
+                            creased_.insert(edgeKey(chartOf[t], chartOf[other]));
                     }
             }
         for (uint32_t c = 0; c < n; ++c) push(c);
@@ -546,7 +569,7 @@ public:
             queue_.pop();
             const uint32_t a = candidate.a, b = candidate.b;
             if (!alive_[a] || !alive_[b] || version_[a] != candidate.versionA || version_[b] != candidate.versionB) continue;
-            if (failed_.count(edgeKey(a, b))) continue;
+            if (failed_.count(edgeKey(a, b)) || creased_.count(edgeKey(a, b))) continue;
             const bool aBigger = charts_[a].area > charts_[b].area || (charts_[a].area == charts_[b].area && a < b);
             const uint32_t big = aBigger ? a : b, small = aBigger ? b : a;
             Chart merged;
@@ -563,6 +586,7 @@ public:
             ++version_[big];
             for (const auto& [other, length] : neighbours_[small]) {
                 if (other == big) continue;
+                if (creased_.count(edgeKey(small, other))) creased_.insert(edgeKey(big, other));
                 neighbours_[big][other] += length;
                 neighbours_[other].erase(small);
                 neighbours_[other][big] += length;
@@ -594,7 +618,7 @@ private:
     void push(uint32_t c) {
         for (const auto& [other, length] : neighbours_[c]) {
             const uint32_t a = std::min(c, other), b = std::max(c, other);
-            if (failed_.count(edgeKey(a, b))) continue;
+            if (failed_.count(edgeKey(a, b)) || creased_.count(edgeKey(a, b))) continue;
             queue_.push({std::min(charts_[a].area, charts_[b].area), length, a, b, version_[a], version_[b]});
         }
     }
@@ -739,7 +763,9 @@ private:
     std::vector<std::map<uint32_t, double>> neighbours_;
     std::vector<Rectangle> rectangles_;
     std::priority_queue<Candidate> queue_;
+    bool keepCreases_ = true;
     std::set<uint64_t> failed_;
+    std::set<uint64_t> creased_;  // pairs that meet along a crease (kMergeFoldDegrees)
 };
 
 // Skyline packing (bottom-left) of the charts' rectangles at texel size s (world units per
@@ -1008,7 +1034,8 @@ double surfaceArea(const Scene& scene, const std::vector<uint32_t>& meshes) {
 
 // The charts of every mesh given, grown, cut where wasteful and merged (at about texel size
 // s), each turned to its smallest rectangle.
-std::vector<Chart> sceneCharts(const Scene& scene, const std::vector<uint32_t>& unwrapped, double s, size_t& grown) {
+std::vector<Chart> sceneCharts(const Scene& scene, const std::vector<uint32_t>& unwrapped, double s, bool keepCreases,
+                               size_t& grown) {
     // The side of the square the charts would fill at 60%.
     const double lengthCap = kMergeLengthShare * std::sqrt(surfaceArea(scene, unwrapped) / 0.6);
     std::vector<std::vector<Chart>> perMesh(scene.meshes.size());
@@ -1020,7 +1047,7 @@ std::vector<Chart> sceneCharts(const Scene& scene, const std::vector<uint32_t>& 
         std::vector<Chart> charts = growCharts(topo, m);
         grownPerMesh[m] = charts.size();
         for (Chart& chart : charts) splitWasteful(topo, std::move(chart), s, perMesh[m]);
-        ChartMerger(topo, perMesh[m], lengthCap, s).run();
+        ChartMerger(topo, perMesh[m], lengthCap, s, keepCreases).run();
         for (Chart& chart : perMesh[m]) measureChart(chart);
     });
     std::vector<Chart> charts;
@@ -1084,86 +1111,120 @@ LightmapUvReport generateLightmapUvs(Scene& scene, const std::vector<uint32_t>& 
         while (side < atlas.maxSide && fillingTexel(side) > atlas.texelSize) side *= 2.0;
         texelGuess = std::min(atlas.texelSize, fillingTexel(side));
     }
-    std::vector<Chart> charts = sceneCharts(scene, unwrapped, texelGuess, report.grownCharts);
+    // Lays `charts` out (their uv and atlas place): the atlas's size and texel size, or false
+    // where they do not fit the atlas asked at any texel size.
+    struct Layout {
+        bool fitted = false;
+        int width = 0, height = 0;
+        double texelSize = 0.0, projected = 0.0;
+    };
+    const auto layOut = [&](std::vector<Chart>& charts) {
+        Layout out;
+        int width = byTexel ? atlas.maxSide : atlas.width, height = byTexel ? atlas.maxSide : atlas.height;
+        double projected = 0.0;
+        for (const Chart& chart : charts) projected += chart.projectedArea;
+        out.projected = projected;
+        std::vector<uint32_t> order(charts.size());
+        std::iota(order.begin(), order.end(), 0u);
+        std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+            const float ha = std::min(charts[a].upper.x - charts[a].lower.x, charts[a].upper.y - charts[a].lower.y);
+            const float hb = std::min(charts[b].upper.x - charts[b].lower.x, charts[b].upper.y - charts[b].lower.y);
+            return ha > hb;
+        });
+        const auto fitsRectangles = [&](double s, int w, int h) { return pack(charts, order, s, w, h); };
+        const auto fitsProfiles = [&](double s, int w, int h) { return packByProfiles(charts, order, s, w, h); };
+        const auto fits = [&](double s, int side) { return fitsProfiles(s, side, side) || fitsRectangles(s, side, side); };
+        double s = atlas.texelSize;
+        bool packed = false;  // at the texel size asked
+        if (byTexel && atlas.powerOfTwo) {
+            // The smallest power-of-two square that holds the charts at the texel size asked, then
+            // the texel size that fills it, as for an atlas asked by size.
+            int side = 16;
+            while (side < atlas.maxSide && double(side) * side < projected / (s * s)) side *= 2;
+            while (side < atlas.maxSide && !fits(s, side)) side *= 2;
+            width = height = std::min(side, atlas.maxSide);
+        } else if (byTexel && (fitsRectangles(s, atlas.maxSide, atlas.maxSide) || fits(s, atlas.maxSide))) {
+            // The smallest square, a multiple of 4 texels a side, that holds the charts at the
+            // texel size asked; the charts' area alone bounds it from below. Rectangles (fast)
+            // bracket it, then profiles refine it within kProfileBracket of theirs.
+            const int least = std::max(16, roundUpTo4(std::sqrt(projected) / s)) - 4;  // never fits
+            const auto smallest = [&](int lower, int upper, auto&& fitsAt) {
+                while (upper - lower > 4) {
+                    const int middle = roundUpTo4(0.5 * (lower + upper));
+                    (fitsAt(middle) ? upper : lower) = middle;
+                }
+                return upper;
+            };
+            int upper = atlas.maxSide;
+            if (fitsRectangles(s, upper, upper))
+                upper = smallest(least, upper, [&](int side) { return fitsRectangles(s, side, side); });
+            upper = smallest(std::max(least, roundUpTo4(kProfileBracket * upper) - 4), upper,
+                             [&](int side) { return fits(s, side); });
+            width = height = upper;
+            if (!fitsProfiles(s, width, height)) fitsRectangles(s, width, height);
+            packed = true;
+        }
+        if (!packed) {
+            // An atlas size (or a texel size whose charts overfill the largest atlas): the smallest
+            // texel size whose packing fits. Rectangles (fast) bracket it; profiles (denser,
+            // slower) then refine it below the rectangles' in a few steps.
+            const auto lowest = [&] { return std::sqrt(std::max(projected, 1e-30) / (double(width) * double(height))); };
+            double lower = lowest();
+            double upper = lower;
+            for (int k = 0; k < 60 && !fitsRectangles(upper, width, height); ++k) upper *= 2.0;
+            if (!fitsRectangles(upper, width, height)) return out;
+            for (int k = 0; k < 24; ++k) {
+                const double middle = 0.5 * (lower + upper);
+                (fitsRectangles(middle, width, height) ? upper : lower) = middle;
+            }
+            s = upper;
+            if (fitsProfiles(upper, width, height)) {
+                lower = std::max(lowest(), kProfileBracket * upper);
+                bool fitted = false;  // the last pack tried fitted: its layout stands
+                for (int k = 0; k < kProfileSteps; ++k) {
+                    const double middle = 0.5 * (lower + upper);
+                    fitted = fitsProfiles(middle, width, height);
+                    (fitted ? upper : lower) = middle;
+                }
+                s = upper;
+                if (!fitted) fitsProfiles(s, width, height);
+            } else {
+                fitsRectangles(s, width, height);  // profiles do not nest these charts at the rectangles' size: rectangles
+            }
+        }
+        out.fitted = true;
+        out.width = width;
+        out.height = height;
+        out.texelSize = s;
+        return out;
+    };
+    // Charts kept apart at hard creases, unless that costs the atlas more than
+    // kCreaseTexelCost in texel size (a flat-shaded level is thousands of faces, each then a
+    // chart with its padding) or does not fit at all: then merged across them as well, and said.
+    std::vector<Chart> charts = sceneCharts(scene, unwrapped, texelGuess, true, report.grownCharts);
     if (charts.empty()) {
         if (byTexel) report.width = report.height = 16;
         return report;
     }
-    double projected = 0.0;
-    for (const Chart& chart : charts) projected += chart.projectedArea;
-
-    std::vector<uint32_t> order(charts.size());
-    std::iota(order.begin(), order.end(), 0u);
-    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-        const float ha = std::min(charts[a].upper.x - charts[a].lower.x, charts[a].upper.y - charts[a].lower.y);
-        const float hb = std::min(charts[b].upper.x - charts[b].lower.x, charts[b].upper.y - charts[b].lower.y);
-        return ha > hb;
-    });
-    const auto fitsRectangles = [&](double s, int w, int h) { return pack(charts, order, s, w, h); };
-    const auto fitsProfiles = [&](double s, int w, int h) { return packByProfiles(charts, order, s, w, h); };
-    const auto fits = [&](double s, int side) { return fitsProfiles(s, side, side) || fitsRectangles(s, side, side); };
-    double s = atlas.texelSize;
-    bool packed = false;  // at the texel size asked
-    if (byTexel && atlas.powerOfTwo) {
-        // The smallest power-of-two square that holds the charts at the texel size asked, then
-        // the texel size that fills it, as for an atlas asked by size.
-        int side = 16;
-        while (side < atlas.maxSide && double(side) * side < projected / (s * s)) side *= 2;
-        while (side < atlas.maxSide && !fits(s, side)) side *= 2;
-        width = height = std::min(side, atlas.maxSide);
-    } else if (byTexel && (fitsRectangles(s, atlas.maxSide, atlas.maxSide) || fits(s, atlas.maxSide))) {
-        // The smallest square, a multiple of 4 texels a side, that holds the charts at the
-        // texel size asked; the charts' area alone bounds it from below. Rectangles (fast)
-        // bracket it, then profiles refine it within kProfileBracket of theirs.
-        const int least = std::max(16, roundUpTo4(std::sqrt(projected) / s)) - 4;  // never fits
-        const auto smallest = [&](int lower, int upper, auto&& fitsAt) {
-            while (upper - lower > 4) {
-                const int middle = roundUpTo4(0.5 * (lower + upper));
-                (fitsAt(middle) ? upper : lower) = middle;
-            }
-            return upper;
-        };
-        int upper = atlas.maxSide;
-        if (fitsRectangles(s, upper, upper))
-            upper = smallest(least, upper, [&](int side) { return fitsRectangles(s, side, side); });
-        upper = smallest(std::max(least, roundUpTo4(kProfileBracket * upper) - 4), upper,
-                         [&](int side) { return fits(s, side); });
-        width = height = upper;
-        if (!fitsProfiles(s, width, height)) fitsRectangles(s, width, height);
-        packed = true;
-    }
-    if (!packed) {
-        // An atlas size (or a texel size whose charts overfill the largest atlas): the smallest
-        // texel size whose packing fits. Rectangles (fast) bracket it; profiles (denser,
-        // slower) then refine it below the rectangles' in a few steps.
-        const auto lowest = [&] { return std::sqrt(std::max(projected, 1e-30) / (double(width) * double(height))); };
-        double lower = lowest();
-        double upper = lower;
-        for (int k = 0; k < 60 && !fitsRectangles(upper, width, height); ++k) upper *= 2.0;
-        if (!fitsRectangles(upper, width, height))
-            throw SettingsError("lightmap UVs: " + std::to_string(charts.size()) + " charts do not fit a " +
-                                std::to_string(width) + " x " + std::to_string(height) +
-                                " atlas at any texel size (each takes " + std::to_string(2 * kPaddingTexels + 1) +
-                                " texels of padding along each axis): ask for a larger atlas");
-        for (int k = 0; k < 24; ++k) {
-            const double middle = 0.5 * (lower + upper);
-            (fitsRectangles(middle, width, height) ? upper : lower) = middle;
-        }
-        s = upper;
-        if (fitsProfiles(upper, width, height)) {
-            lower = std::max(lowest(), kProfileBracket * upper);
-            bool fitted = false;  // the last pack tried fitted: its layout stands
-            for (int k = 0; k < kProfileSteps; ++k) {
-                const double middle = 0.5 * (lower + upper);
-                fitted = fitsProfiles(middle, width, height);
-                (fitted ? upper : lower) = middle;
-            }
-            s = upper;
-            if (!fitted) fitsProfiles(s, width, height);
-        } else {
-            fitsRectangles(s, width, height);  // profiles do not nest these charts at the rectangles' size: rectangles
+    Layout layout = layOut(charts);
+    if (!layout.fitted || layout.texelSize > kCreaseTexelCost * texelGuess) {
+        size_t grown = 0;
+        std::vector<Chart> merged = sceneCharts(scene, unwrapped, texelGuess, false, grown);
+        const Layout other = layOut(merged);
+        if (other.fitted && (!layout.fitted || other.texelSize < layout.texelSize)) {
+            charts = std::move(merged);
+            layout = other;
+            report.mergedAcrossCreases = true;
         }
     }
+    if (!layout.fitted)
+        throw SettingsError("lightmap UVs: " + std::to_string(charts.size()) + " charts do not fit a " +
+                            std::to_string(atlas.width) + " x " + std::to_string(atlas.height) +
+                            " atlas at any texel size (each takes " + std::to_string(2 * kPaddingTexels + 1) +
+                            " texels of padding along each axis): ask for a larger atlas");
+    const double s = layout.texelSize, projected = layout.projected;
+    width = layout.width;
+    height = layout.height;
     report.width = width;
     report.height = height;
     report.texelSize = s;
@@ -1223,10 +1284,12 @@ LightmapUvReport generateLightmapUvs(Scene& scene, const std::vector<uint32_t>& 
 std::string describeLightmapUvs(const LightmapUvReport& report) {
     char text[320];
     std::snprintf(text, sizeof text,
-                  "lightmap UVs generated: %zu meshes, %zu charts (%zu grown, then merged) in %d x %d, texel %.3g "
+                  "lightmap UVs generated: %zu meshes, %zu charts (%zu grown, then merged%s) in %d x %d, texel %.3g "
                   "(scene units), charts %.0f%% of the atlas, area stretch at most %.2f (mean %.3f), %zu charts under "
                   "%g x %g texels, %.2f s",
-                  report.meshes, report.charts, report.grownCharts, report.width, report.height, report.texelSize,
+                  report.meshes, report.charts, report.grownCharts,
+                  report.mergedAcrossCreases ? " across hard edges too, to fit the atlas" : "", report.width, report.height,
+                  report.texelSize,
                   100.0 * report.occupancy, report.maxStretch, report.meanStretch, report.smallChartCount(),
                   kSmallChartTexels, kSmallChartTexels, report.seconds);
     return text;

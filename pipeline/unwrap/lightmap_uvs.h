@@ -15,9 +15,10 @@
 //   triangle over and overlaps nothing, and its bounding rectangle, padding included, is
 //   little larger than its parts' and no longer than kMergeLengthShare allows. Greedy growth
 //   on a smooth but curved surface (the grey-white room's cushions) left pockets between the
-//   cones as charts of their own, each with its padding; a strip folded off a face (a table's
-//   edge, a step) unfolds into it with no stretch at all. Smaller charts merge first, each
-//   with the neighbour it shares the longest edge with.
+//   cones as charts of their own, each with its padding; a strip folded smoothly off a face (a
+//   rounded edge) unfolds into it with no stretch at all. Smaller charts merge first, each
+//   with the neighbour it shares the longest edge with. Charts that meet at a hard crease
+//   (kMergeFoldDegrees) stay apart unless the atlas cannot afford it (kCreaseTexelCost).
 // A chart still under kSmallChartTexels along a side at the texel size packed is reported.
 //
 // Each chart is turned to its smallest bounding rectangle and packed at one world-space texel
@@ -46,6 +47,17 @@
 namespace vl {
 
 constexpr float kChartAngleDegrees = 30.0f;
+// Two charts that meet along a hard crease, an edge whose triangles fold by more than
+// kMergeFoldDegrees and whose vertex normals there differ by more than kSmoothShadingDegrees,
+// do not merge: a bilinear read near the fold would mix the light of both faces (a sunlit
+// sill's top into its shaded front), and a texel on the fold would hold their mean. The bake's
+// seams (bake/lightmap_seams.h) call an edge smooth by the same normals.
+constexpr float kMergeFoldDegrees = 45.0f;
+constexpr float kSmoothShadingDegrees = 15.0f;
+// Where keeping charts apart at hard creases makes the texels coarser than this many times the
+// texel size the charts' area alone would give at 60% of the atlas (or does not fit at all),
+// the charts merge across creases too, if that packs finer (LightmapUvReport::mergedAcrossCreases).
+constexpr double kCreaseTexelCost = 1.25;
 constexpr int kPaddingTexels = 1;
 constexpr int kMaxAtlasSide = 8192;
 // The largest atlas a side that an atlas sized for the bake (`lightmap-res auto`) gets.
@@ -85,6 +97,7 @@ struct LightmapUvReport {
     double occupancy = 0.0;     // charts' flattened area / atlas area, in texels
     double maxStretch = 1.0;    // largest 3D area / flattened area over triangles, at the texel size
     double meanStretch = 1.0;   // area-weighted
+    bool mergedAcrossCreases = false;  // the atlas asked could not keep them apart (kCreaseTexelCost)
     // Charts under kSmallChartTexels along a side that no neighbour could take, per mesh (most first).
     std::vector<SmallCharts> smallCharts;
     size_t smallChartCount() const;

@@ -6,6 +6,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -291,29 +292,54 @@ TEST_CASE("A sheet curved past the chart cone unrolls into one chart, metres fro
     checkAtlas(scene, report, "sheet");
 }
 
-TEST_CASE("A strip folded off a face merges into its chart; a speck no chart can take is reported by mesh", "[unwrap]") {
+TEST_CASE("A strip folded smoothly off a face merges into its chart, a hard-edged one keeps its own; a speck no chart can take is reported by mesh", "[unwrap]") {
     // A 1 m table top with a 1 cm lip down its front edge (one mesh: they share the edge),
     // and a 5 mm speck on its own: at 64² the texel is about 1.6 cm, so the lip and the speck
-    // are under 2 texels wide. The lip unfolds into the top's chart; the speck has no
-    // neighbour and is reported under its mesh's name.
-    Scene scene;
-    Mesh table = gridMesh("table", 1, 1, [](float u, float v) { return vec3(u, 0.75f, -v); });
-    addTriangle(table, vec3(0.0f, 0.75f, 0.0f), vec3(0.0f, 0.74f, 0.0f), vec3(1.0f, 0.74f, 0.0f));
-    addTriangle(table, vec3(0.0f, 0.75f, 0.0f), vec3(1.0f, 0.74f, 0.0f), vec3(1.0f, 0.75f, 0.0f));
-    scene.meshes.push_back(table);
-    Mesh speck;
-    speck.name = "speck";
-    addTriangle(speck, vec3(0.5f, 1.0f, -0.5f), vec3(0.505f, 1.0f, -0.5f), vec3(0.5f, 1.0f, -0.505f));
-    scene.meshes.push_back(speck);
-    const LightmapUvReport report = generateLightmapUvs(scene, {0, 1}, 64, 64);
-    INFO(describeLightmapUvs(report));
-    CHECK(report.grownCharts == 3);
-    CHECK(report.charts == 2);
-    REQUIRE(report.smallCharts.size() == 1);
-    CHECK(report.smallCharts[0].mesh == "speck");
-    CHECK(report.smallCharts[0].charts == 1);
-    CHECK(report.smallChartCount() == 1);
-    checkAtlas(scene, report, "table and speck");
+    // are under 2 texels wide. Where the edge is shaded smooth (the top's and the lip's vertex
+    // normals agree along it: a rounded edge) the lip unfolds into the top's chart. Where it
+    // is a hard edge (each face its own normal, or no normals at all) the two are lit apart, a
+    // sunlit top over a shaded front, and a texel of one chart on the fold would hold their
+    // mean: the lip stays a chart of its own, reported small. The speck has no neighbour.
+    for (const char* edge : {"smooth", "hard", "no normals"}) {
+        DYNAMIC_SECTION(edge) {
+            Scene scene;
+            Mesh table = gridMesh("table", 1, 1, [](float u, float v) { return vec3(u, 0.75f, -v); });
+            addTriangle(table, vec3(0.0f, 0.75f, 0.0f), vec3(0.0f, 0.74f, 0.0f), vec3(1.0f, 0.74f, 0.0f));
+            addTriangle(table, vec3(0.0f, 0.75f, 0.0f), vec3(1.0f, 0.74f, 0.0f), vec3(1.0f, 0.75f, 0.0f));
+            const std::string kind = edge;
+            if (kind != "no normals") {
+                const vec3 up(0.0f, 1.0f, 0.0f), front(0.0f, 0.0f, 1.0f), rounded = glm::normalize(up + front);
+                for (const vec3& p : table.positions) {
+                    const bool onEdge = p.y == 0.75f && p.z == 0.0f;
+                    const bool onLip = table.normals.size() >= 4;  // the grid's 4 corners come first
+                    table.normals.push_back(kind == "smooth" && onEdge ? rounded : onLip ? front : up);
+                }
+            }
+            scene.meshes.push_back(table);
+            Mesh speck;
+            speck.name = "speck";
+            addTriangle(speck, vec3(0.5f, 1.0f, -0.5f), vec3(0.505f, 1.0f, -0.5f), vec3(0.5f, 1.0f, -0.505f));
+            scene.meshes.push_back(speck);
+            const LightmapUvReport report = generateLightmapUvs(scene, {0, 1}, 64, 64);
+            INFO(describeLightmapUvs(report));
+            CHECK(report.grownCharts == 3);
+            if (kind == "smooth") {
+                CHECK(report.charts == 2);
+                REQUIRE(report.smallCharts.size() == 1);
+                CHECK(report.smallCharts[0].mesh == "speck");
+                CHECK(report.smallChartCount() == 1);
+            } else {
+                CHECK(report.charts == 3);
+                REQUIRE(report.smallCharts.size() == 2);
+                CHECK(report.smallChartCount() == 2);
+                std::vector<std::string> small;
+                for (const SmallCharts& c : report.smallCharts) small.push_back(c.mesh);
+                std::sort(small.begin(), small.end());
+                CHECK(small == std::vector<std::string>{"speck", "table"});
+            }
+            checkAtlas(scene, report, std::string("table and speck, ") + edge + " edge");
+        }
+    }
 }
 
 TEST_CASE("A texel size gives that density in the smallest atlas that holds it; a power of two, at least that density", "[unwrap]") {
