@@ -18,10 +18,11 @@ vec3 texel(const Image& image, int x, int y) {
     return image.rgb(x, y);
 }
 
-// TEXCOORD_1 at a point of a triangle: its barycentrics in the triangle's plane (double: a
-// sample's position is the mean of several hits, and its uv must not drift by a texel on a
-// large triangle).
-vec2 uv1At(const Mesh& mesh, uint32_t localTriangle, const vec3* corners, const vec3& point) {
+}  // namespace
+
+// Its barycentrics in the triangle's plane in double: a sample's position is the mean of several
+// hits, and its uv must not drift by a texel on a large triangle.
+vec2 lightmapUvAt(const Mesh& mesh, uint32_t localTriangle, const vec3* corners, const vec3& point) {
     const glm::dvec3 a(corners[0]), e1 = glm::dvec3(corners[1]) - a, e2 = glm::dvec3(corners[2]) - a;
     const glm::dvec3 p = glm::dvec3(point) - a;
     const double d11 = glm::dot(e1, e1), d12 = glm::dot(e1, e2), d22 = glm::dot(e2, e2);
@@ -36,8 +37,6 @@ vec2 uv1At(const Mesh& mesh, uint32_t localTriangle, const vec3* corners, const 
                           b2 * glm::dvec2(mesh.uv1[index[2]]);
     return vec2(uv);
 }
-
-}  // namespace
 
 Image shippedLightmapTexels(const Image& total) { return decodeRgbm(encodeRgbm(total)); }
 
@@ -75,7 +74,7 @@ Image renderLightmapImage(const CameraReceivers& camera, const Scene& scene, con
                     if (s.triangle < triangles.meshIndex.size()) {
                         const uint32_t m = triangles.meshIndex[s.triangle];
                         if (lightmapOf[m] >= 0) {
-                            const vec2 uv = uv1At(scene.meshes[m], triangles.localIndex[s.triangle],
+                            const vec2 uv = lightmapUvAt(scene.meshes[m], triangles.localIndex[s.triangle],
                                                   &triangles.vertices[3 * size_t(s.triangle)], s.position);
                             light = sampleLightmap(lightmaps[size_t(lightmapOf[m])].texels, uv);
                         }

@@ -41,6 +41,10 @@ struct ShippedLightmap {
 // A lightmap's total (padding dilated) as scene.glb carries it and the viewer decodes it.
 Image shippedLightmapTexels(const Image& total);
 
+// TEXCOORD_1 at `point` on triangle `localTriangle` of `mesh` (`corners`: its world-space
+// corners); NaN where the mesh has no uv1 for it.
+vec2 lightmapUvAt(const Mesh& mesh, uint32_t localTriangle, const vec3* corners, const vec3& point);
+
 // The lightmap at TEXCOORD_1 `uv`, bilinear between texel centres, clamped to the edge.
 vec3 sampleLightmap(const Image& texels, vec2 uv);
 
