@@ -49,9 +49,7 @@ int main(int argc, char** argv) {
         for (int i = 2; i < argc; ++i) {
             const std::string arg = argv[i];
             if (arg == "--pixel" && i + 1 < argc) {
-                int x = 0, y = 0;
-                if (std::sscanf(argv[++i], "%d,%d", &x, &y) != 2) throw SettingsError(std::string("--pixel: '") + argv[i] + "' is not X,Y");
-                pixels.emplace_back(x, y);
+                pixels.push_back(parsePoint(arg, argv[++i]));
             } else if (arg == "--rays" && i + 1 < argc) {
                 raysPerAxis = std::max(1, int(std::lround(std::sqrt(std::stod(argv[++i])))));
             } else {

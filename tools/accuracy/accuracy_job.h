@@ -7,7 +7,9 @@
 #include "bake/job_file.h"
 #include "core/error.h"
 
+#include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace vl {
@@ -25,6 +27,13 @@ inline BakeJob accuracyJob(const std::string& input, const SettingAssignments& a
     job.scenePath = input;
     job.settings = settings;
     return job;
+}
+
+// "X,Y" after a flag such as --pixel; SettingsError naming the flag otherwise.
+inline std::pair<int, int> parsePoint(const std::string& flag, const char* text) {
+    int x = 0, y = 0;
+    if (std::sscanf(text, "%d,%d", &x, &y) != 2) throw SettingsError(flag + ": '" + text + "' is not X,Y");
+    return {x, y};
 }
 
 }  // namespace vl

@@ -80,13 +80,9 @@ int main(int argc, char** argv) {
         for (int i = 2; i < argc; ++i) {
             const std::string arg = argv[i];
             if (arg == "--pixel" && i + 1 < argc) {
-                int x = 0, y = 0;
-                if (std::sscanf(argv[++i], "%d,%d", &x, &y) != 2) throw SettingsError(std::string("--pixel: '") + argv[i] + "' is not X,Y");
-                pixels.emplace_back(x, y);
+                pixels.push_back(parsePoint(arg, argv[++i]));
             } else if (arg == "--texel" && i + 1 < argc) {
-                int x = 0, y = 0;
-                if (std::sscanf(argv[++i], "%d,%d", &x, &y) != 2) throw SettingsError(std::string("--texel: '") + argv[i] + "' is not X,Y");
-                texels.emplace_back(x, y);
+                texels.push_back(parsePoint(arg, argv[++i]));
             } else if (arg == "--classes" && i + 1 < argc) {
                 classesPath = argv[++i];
             } else if (arg == "--spp" && i + 1 < argc) {
