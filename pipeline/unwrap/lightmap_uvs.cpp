@@ -533,9 +533,8 @@ public:
     // s: about the texel size the charts will be packed at; lengthCap: see kMergeLengthShare.
     // keepCreases: charts meeting along a hard crease do not merge (kMergeFoldDegrees).
     ChartMerger(const Topology& topo, std::vector<Chart>& charts, double lengthCap, double s, bool keepCreases)
-        : topo_(topo), charts_(charts), lengthCap_(lengthCap), texel_(s), localOf_(topo.welded.size(), -1) {
-        keepCreases_ = keepCreases;
-    }
+        : topo_(topo), charts_(charts), lengthCap_(lengthCap), texel_(s), keepCreases_(keepCreases),
+          localOf_(topo.welded.size(), -1) {}
 
     void run() {
         const size_t n = charts_.size();
@@ -756,6 +755,7 @@ private:
     const Topology& topo_;
     std::vector<Chart>& charts_;
     const double lengthCap_, texel_;
+    const bool keepCreases_;
     const double maxStretch_ = 1.0 / std::cos(glm::radians(double(kChartAngleDegrees)));
     std::vector<int32_t> localOf_;  // scratch: a welded vertex's index in the union being built
     std::vector<uint8_t> alive_;
@@ -763,7 +763,6 @@ private:
     std::vector<std::map<uint32_t, double>> neighbours_;
     std::vector<Rectangle> rectangles_;
     std::priority_queue<Candidate> queue_;
-    bool keepCreases_ = true;
     std::set<uint64_t> failed_;
     std::set<uint64_t> creased_;  // pairs that meet along a crease (kMergeFoldDegrees)
 };
@@ -1219,7 +1218,7 @@ LightmapUvReport generateLightmapUvs(Scene& scene, const std::vector<uint32_t>& 
     }
     if (!layout.fitted)
         throw SettingsError("lightmap UVs: " + std::to_string(charts.size()) + " charts do not fit a " +
-                            std::to_string(atlas.width) + " x " + std::to_string(atlas.height) +
+                            std::to_string(width) + " x " + std::to_string(height) +
                             " atlas at any texel size (each takes " + std::to_string(2 * kPaddingTexels + 1) +
                             " texels of padding along each axis): ask for a larger atlas");
     const double s = layout.texelSize, projected = layout.projected;
