@@ -158,6 +158,8 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
              if (v != "voxels" && v != "exact") throw SettingsError("setting hit-light = '" + v + "' is not one of voxels, exact");
              s.hitLightExact = v == "exact";
          }},
+        {"near-field", "a lightmap record's ray that hits a surface nearer than this many voxels traces the light there on, by a path of cosine rays, instead of reading the voxel, which a crease narrower than a voxel shares with the open surface beside it; 0: every hit reads its voxel (default 1)",
+         [](S& s, const std::string& v) { s.nearFieldVoxels = static_cast<float>(parseRealSetting("near-field", v, 0, 64)); }},
         {"lightmap-stitch", "stitch lightmap chart seams: where one surface is split between two charts, move the texels on both sides by a small least-squares solve so they read one value along the split (default true)",
          [](S& s, const std::string& v) { s.lightmapStitch = parseBoolSetting("lightmap-stitch", v); }},
         {"lightmap-subsamples", "n × n sub-texel probes per texel (default 4)",
@@ -306,6 +308,7 @@ std::string describeBakeSettings(const BakeSettings& s) {
     if (s.lightmapSide != LightmapSide::Inside) out << ", lightmap-side=" << toString(s.lightmapSide);
     if (!s.lightmapStitch) out << ", lightmap-stitch=false";
     if (!s.hitLightExact) out << ", hit-light=voxels";
+    if (s.nearFieldVoxels != BakeSettings{}.nearFieldVoxels) out << ", near-field=" << s.nearFieldVoxels;
     if (s.filesOutsideScene) out << ", files-outside-scene=true";
     if (!s.voxel.ownFrame) out << ", grid-frame=world";
     for (size_t g = 0; g < s.lightmap.atlases.size(); ++g) {

@@ -125,6 +125,10 @@ struct BakeSettings {
     // surfaces a few centimetres apart); with punctual lights the bright patches are then off.
     // docs/accuracy.md.
     bool hitLightExact = true;
+    // near-field: a lightmap record's ray that hits a surface nearer than this many voxels
+    // traces its light on instead of reading the voxel there (bake/ray_gather.h FanExtras);
+    // 0: every hit reads its voxel. docs/accuracy.md.
+    float nearFieldVoxels = 1.0f;
     DirectLightSettings direct;
     // A uniform sky's radiance, W/(m²·sr) (scene.h Sky; glTF has none): zero, no sky.
     vec3 sky{0.0f};

@@ -20,6 +20,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -208,10 +209,64 @@ std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& m
     const bool sky = extras && extras->readSky && scene.sky.present();
     const std::vector<FaceRadiance>* lights = extras && scene.lightCount > 0 ? extras->lightsAtHits : nullptr;
     const float imageDraws = scene.sky.samplable() ? float(skyDrawsPerAxis * skyDrawsPerAxis) : 0.0f;
+    // The light a hit sends back along the ray, read from its voxels (less the lights' part,
+    // taken at the hit itself by a shadow ray, with lightsAtHits).
+    const auto readVoxels = [&](const Ray& ray, const Hit& hit, Pcg32& lightDraws, IndexLeafCache& leaves) {
+        vec3 L(0.0f);
+        readHitTexels(level0, leaves, ray.at(hit.t), ray.direction, windingCross(scene, hit.triangle),
+                      [&](int32_t voxel, int travel, float weight) {
+                          L += weight * faces[size_t(voxel)][size_t(travel ^ 1)];
+                          if (lights) L -= weight * (*lights)[size_t(voxel)][size_t(travel ^ 1)];
+                      });
+        if (lights) L = glm::max(L, vec3(0.0f)) + lightsReflectedAt(scene, bvh, ray, hit, lightDraws);
+        return L;
+    };
+    // The same light for a near hit (FanExtras::nearField): a path of cosine rays from it, each
+    // of its vertices nearer than nearField to the last reflecting its lights and what the next
+    // ray brings back, the first farther one (or the kNearFieldBounces-th) read from its voxels.
+    // Both sides of a surface reflect, as in the path tracer.
+    const float nearField = extras ? extras->nearField : 0.0f;
+    const auto tracedOn = [&](const Ray& first, const Hit& firstHit, Pcg32& lightDraws, Pcg32& nearDraws,
+                              IndexLeafCache& leaves, uint64_t& traced) {
+        vec3 L(0.0f), throughput(1.0f);
+        Ray ray = first;
+        Hit hit = firstHit;
+        for (int depth = 0;; ++depth) {
+            const SurfaceHit h = surfaceAt(scene, hit.triangle, hit.b1, hit.b2);
+            // Seen from a bounce, an emitter's light is indirect; the first hit's is the
+            // receiver's own direct light.
+            if (depth > 0) L += throughput * emissionAt(scene, h, -ray.direction);
+            if (depth == kNearFieldBounces || (depth > 0 && hit.t >= nearField)) {
+                L += throughput * readVoxels(ray, hit, lightDraws, leaves);
+                break;
+            }
+            if (lights) L += throughput * lightsReflectedAt(scene, bvh, ray, hit, lightDraws);
+            throughput *= baseColorAt(scene, h);
+            if (!(std::max(throughput.x, std::max(throughput.y, throughput.z)) > 1e-3f)) break;
+            const vec3 side = glm::dot(h.geometricNormal, ray.direction) < 0.0f ? h.geometricNormal : -h.geometricNormal;
+            vec2 u;
+            nearDraws.next2D(u.x, u.y);
+            Ray next;
+            next.origin = offsetRayOrigin(h.position, side, bvh.extent);
+            next.direction = sampleDiffuseDirection(side, u);
+            ++traced;
+            Hit nextHit;
+            if (!intersectClosest(bvh, next, nextHit)) {
+                if (scene.sky.present()) L += throughput * skySeenAlong(scene.sky, next.direction).radiance;
+                break;
+            }
+            ray = next;
+            hit = nextHit;
+        }
+        return L;
+    };
+    std::atomic<uint64_t> nearHitCount{0}, nearRayCount{0};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, fans.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
         IndexLeafCache leaves;
+        uint64_t nearHits = 0, nearRays = 0;
         for (size_t q = range.begin(); q != range.end(); ++q) {
             Pcg32 lightDraws = Pcg32::forItem(fans[q].seed, 0, 0x48495453ull);  // "HITS": the suns' disk points
+            Pcg32 nearDraws = Pcg32::forItem(fans[q].seed, 0, 0x4e454152ull);   // "NEAR": the near field's paths
             vec3 sum(0.0f), open(0.0f);
             double squares = 0.0, values = 0.0;  // of every ray's radiance, the sky's too
             uint32_t escaped = 0;
@@ -234,13 +289,9 @@ std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& m
                     values += l;
                 },
                 [&](const Ray& ray, const Hit& hit) {
-                    vec3 L(0.0f);
-                    readHitTexels(level0, leaves, ray.at(hit.t), ray.direction, windingCross(scene, hit.triangle),
-                                  [&](int32_t voxel, int travel, float weight) {
-                                      L += weight * faces[size_t(voxel)][size_t(travel ^ 1)];
-                                      if (lights) L -= weight * (*lights)[size_t(voxel)][size_t(travel ^ 1)];
-                                  });
-                    if (lights) L = glm::max(L, vec3(0.0f)) + lightsReflectedAt(scene, bvh, ray, hit, lightDraws);
+                    const vec3 L = hit.t < nearField ? tracedOn(ray, hit, lightDraws, nearDraws, leaves, nearRays)
+                                                     : readVoxels(ray, hit, lightDraws, leaves);
+                    if (hit.t < nearField) ++nearHits;
                     sum += L;
                     const double l = (double(L.x) + double(L.y) + double(L.z)) / 3.0;
                     squares += l * l;
@@ -259,8 +310,14 @@ std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& m
                 extras->sky[q] = isFinite(open) ? open : vec3(0.0f);
             }
         }
+        nearHitCount += nearHits;
+        nearRayCount += nearRays;
         if (progress) progress->advance(range.size());
     });
+    if (extras) {
+        extras->nearHits = nearHitCount;
+        extras->nearRays = nearRayCount;
+    }
     return irradiance;
 }
 

@@ -62,6 +62,9 @@ namespace vl {
 
 class Progress;
 
+// How deep a near field's path goes before it reads the voxels (FanExtras::nearField).
+inline constexpr int kNearFieldBounces = 8;
+
 // E at every point (W/m²) from raysPerAxis² rays (1 … kMaxGatherRaysPerAxis, else
 // SettingsError). A ray finds the voxels and faces it reads in the level 0 of `mips` (its
 // index and the texels' coverage: where surface is, which does not change with the light)
@@ -94,6 +97,15 @@ struct FanExtras {
     // takes the lights' reflection at the hit point by a shadow ray: a shaded point no longer
     // reads the sunlit surface that shares its voxel.
     const std::vector<FaceRadiance>* lightsAtHits = nullptr;
+    // Set by the caller (near field): a hit nearer than this (world units; 0: none) does not
+    // read its voxel, which holds a crease and the open surface beside it as one face. Its
+    // light is traced on: its emission seen from a bounce, its lights by a shadow ray (with
+    // lightsAtHits), and its albedo times the light one cosine ray from it brings back, by the
+    // same rule, at most kNearFieldBounces deep, then from the voxels. Needs `faces` to hold
+    // all the light but the lights' (no bright patches split off).
+    float nearField = 0.0f;
+    // Rays of the fans that went on at a near hit, and the further rays they traced.
+    uint64_t nearHits = 0, nearRays = 0;
     std::vector<vec3> sky;
     std::vector<float> variance;
     std::vector<uint32_t> escaped;

@@ -102,6 +102,7 @@ void gatherRecords(std::vector<Record>& records, size_t first, int width, const 
     FanExtras extras;
     extras.readSky = settings.gatherSky;
     extras.lightsAtHits = settings.lightsAtHits;
+    extras.nearField = settings.nearField;
     const std::vector<vec3> gathered =
         gatherFans(fans, mips, faces, bvh, scene, settings.raysPerAxis, nullptr, &extras, settings.skyDrawsPerAxis);
     tbb::parallel_for(size_t(0), count, [&](size_t k) {

@@ -40,6 +40,7 @@ struct TexelGatherSettings {
     int skyDrawsPerAxis = 10;  // under an image sky, draws from its image per record (n × n)
     DirectLightSettings direct;  // the direct light that tells a record is open (lights, emitters: no sky)
     const std::vector<FaceRadiance>* lightsAtHits = nullptr;  // hit-light exact (bake/ray_gather.h FanExtras)
+    float nearField = 0.0f;  // world units: hits nearer than it traced on, not read (bake/ray_gather.h FanExtras)
 };
 
 struct TexelGather {

@@ -113,6 +113,57 @@ TEST_CASE("Rays in a closed room whose every wall shows radiance L gather π·L 
     CHECK(samples == 54);
 }
 
+TEST_CASE("A near field traces a hit's light on as albedo times what its next ray brings, then reads the voxels", "[bake]") {
+    // A closed room whose walls' voxels all show radiance L, with no lights and no emission:
+    // a hit's light traced on is its albedo ρ times the light its next ray brings back, so a
+    // path that meets only near hits (nearField larger than the room) reads the voxels after
+    // kNearFieldBounces reflections, E = π·L·ρ^kNearFieldBounces, and π·L where ρ = 1 (white
+    // walls keep all of it, as the voxels' L says). With the near field under every hit's
+    // distance, nothing is traced on: π·L.
+    const vec3 size(1.0f, 0.7f, 0.8f);
+    const vec3 L(0.2f, 0.5f, 1.0f);
+    for (float rho : {1.0f, 0.5f}) {
+        const Scene scene = turnedRoom(size, glm::quat(1.0f, 0.0f, 0.0f, 0.0f), rho);
+        VoxelScene lit = voxels(scene, 1.0 / 29.0);
+        lit.faceRadiance.assign(lit.size(), FaceRadiance{});
+        lit.radiance.assign(lit.size(), L);
+        for (size_t i = 0; i < lit.size(); ++i)
+            for (size_t f = 0; f < 6; ++f) lit.faceRadiance[i][f] = lit.axisWeights[i][f] > 0.0f ? L : vec3(0.0f);
+        const RadianceMips mips = buildRadianceMips(lit, lit.radiance, lit.faceRadiance);
+        const Traced t = traced(scene);
+        std::vector<FanStart> fans;
+        for (const vec3& at : {vec3(0.5f, 0.35f, 0.4f), vec3(0.2f, 0.1f, 0.7f), vec3(0.9f, 0.6f, 0.1f)})
+            for (const vec3& normal : {vec3(0, 1, 0), vec3(0, -1, 0), glm::normalize(vec3(1, 1, -1))}) {
+                FanStart fan;
+                fan.origin = at;
+                vec3 tangent, bitangent;
+                orthonormalBasis(normal, tangent, bitangent);
+                fan.frame = fanFrame(normal, tangent, 0.3f);
+                fan.seed = fans.size();
+                fans.push_back(fan);
+            }
+        const int raysPerAxis = 8;
+        const size_t rays = fans.size() * size_t(raysPerAxis * raysPerAxis);
+        for (float nearField : {10.0f, 0.01f}) {
+            FanExtras extras;
+            extras.readSky = false;
+            extras.nearField = nearField;
+            const std::vector<vec3> E = gatherFans(fans, mips.view(), lit.faceRadiance, t.bvh.view(), t.scene.view(),
+                                                   raysPerAxis, nullptr, &extras);
+            const bool traces = nearField > 1.0f;
+            const float expected = traces ? std::pow(rho, float(kNearFieldBounces)) : 1.0f;
+            INFO("albedo " << rho << ", near field " << nearField << " m");
+            CHECK(extras.nearHits == (traces ? rays : 0u));
+            // Each near hit's path goes kNearFieldBounces rays on (a ray in hundreds may leave
+            // by the seam where two walls meet).
+            if (traces) CHECK(double(extras.nearRays) >= 0.99 * double(rays * kNearFieldBounces));
+            else CHECK(extras.nearRays == 0u);
+            for (size_t q = 0; q < E.size(); ++q)
+                for (int c = 0; c < 3; ++c) CHECK(E[q][c] == Approx(kPi * L[c] * expected).epsilon(0.01));
+        }
+    }
+}
+
 TEST_CASE("Rays read nothing behind the surface they hit", "[bake]") {
     // A lit wall (radiance L on its +X side) 1.5 voxels behind a dark one (no light) facing the
     // same way: rays from in front of the dark wall hit it and must read its black, not the
