@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 
 #include <array>
+#include <limits>
 #include <vector>
 
 namespace vl {
@@ -25,6 +26,14 @@ namespace {
 
 constexpr int kSideRays = 16;     // 4 points × 2 × 2
 constexpr int kClearlyFewer = 4;  // of them
+// Where the sky does not tell the sides apart: a side whose rays meet something four times
+// nearer than the other side's is the one against a wall (a picture frame's back, a panel's
+// face on the plaster), and the other side is the one the room sees. Distances are capped at
+// a twentieth of the scene's size, so that the open room, not its far walls, counts. Taken
+// before the sky, it turned the grey-white room's window jambs and walls to their outer
+// faces (docs/accuracy.md).
+constexpr float kMuchNearer = 0.25f;
+constexpr float kReachCapOfScene = 0.05f;
 
 // What 2 × 2 jittered cosine rays about `normal` from each of a triangle's lookout points find: rays that leave the scene, rays that meet a triangle
 // of the side's own material from behind (a closed solid is one material, as a block is), and
@@ -38,10 +47,11 @@ std::array<vec3, 4> lookoutPoints(const vec3* corner) {
 
 struct SideView {
     int open = 0, behindOwn = 0, behind = 0;
+    float reach = 0.0f;  // the rays' mean distance to what they meet, each at most kReachCap
 };
 
 SideView lookFrom(const BvhView& bvh, const TraceSceneView& scene, const vec3* corner, const vec3& normal, Pcg32& rng,
-                  uint32_t material) {
+                  uint32_t material, float reachCap) {
     vec3 t, b;
     orthonormalBasis(normal, t, b);
     const std::array<vec3, 4> points = lookoutPoints(corner);
@@ -58,8 +68,10 @@ SideView lookFrom(const BvhView& bvh, const TraceSceneView& scene, const vec3* c
                 Hit hit;
                 if (!intersectClosest(bvh, ray, hit)) {
                     ++view.open;
+                    view.reach += reachCap / float(kSideRays);
                     continue;
                 }
+                view.reach += std::min(hit.t, reachCap) / float(kSideRays);
                 if (glm::dot(windingCross(scene, hit.triangle), ray.direction) > 0.0f) {
                     ++view.behind;
                     view.behindOwn += scene.materialIds[hit.triangle] == material;
@@ -101,6 +113,12 @@ size_t orientLightmapSamples(SurfaceSampleSet& samples, const BvhView& bvh, cons
     for (uint32_t t = 0; t < scene.triangleCount; ++t)
         if (held[t]) triangles.push_back(t);
     std::vector<uint8_t> turn(scene.triangleCount, 0);
+    vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+    for (size_t k = 0; k < 3 * size_t(scene.triangleCount); ++k) {
+        lo = glm::min(lo, scene.vertices[k]);
+        hi = glm::max(hi, scene.vertices[k]);
+    }
+    const float reachCap = kReachCapOfScene * glm::length(hi - lo);
     tbb::parallel_for(size_t(0), triangles.size(), [&](size_t k) {
         const uint32_t t = triangles[k];
         const vec3* v = scene.vertices + 3 * size_t(t);
@@ -109,8 +127,8 @@ size_t orientLightmapSamples(SurfaceSampleSet& samples, const BvhView& bvh, cons
         if (!(area2 > 0.0f)) return;
         const vec3 n = cross / area2;
         Pcg32 rng = Pcg32::forItem(t, 0, 0x51de);
-        const SideView front = lookFrom(bvh, scene, v, n, rng, scene.materialIds[t]);
-        const SideView back = lookFrom(bvh, scene, v, -n, rng, scene.materialIds[t]);
+        const SideView front = lookFrom(bvh, scene, v, n, rng, scene.materialIds[t], reachCap);
+        const SideView back = lookFrom(bvh, scene, v, -n, rng, scene.materialIds[t], reachCap);
         // Never a side inside a closed solid: one whose rays mostly meet its own material from
         // behind (a block's faces seen from within), or whose every ray meets something from
         // behind and that faces no open space (the sealed gap under a floor slab in a wall
@@ -122,7 +140,10 @@ size_t orientLightmapSamples(SurfaceSampleSet& samples, const BvhView& bvh, cons
         };
         const bool frontEnclosed = enclosed(front, n), backEnclosed = enclosed(back, -n);
         if (backEnclosed) return;
-        if (frontEnclosed || back.open + kClearlyFewer <= front.open) turn[t] = 1;
+        const bool skyDecides = std::abs(back.open - front.open) >= kClearlyFewer;
+        if (frontEnclosed || back.open + kClearlyFewer <= front.open ||
+            (!skyDecides && front.reach < kMuchNearer * back.reach))
+            turn[t] = 1;
     });
     size_t turned = 0;
     for (uint32_t t : triangles) turned += turn[t];

@@ -23,7 +23,7 @@ enum class LightmapSide {
 };
 
 // Changes when the rule below does: caches of what it decides (the bench's references) key on it.
-constexpr int kLightmapSideRule = 2;
+constexpr int kLightmapSideRule = 3;
 
 LightmapSide parseLightmapSide(const std::string& text);  // SettingsError naming lightmap-side
 const char* toString(LightmapSide side);
@@ -32,8 +32,9 @@ const char* toString(LightmapSide side);
 // points of it. A side inside a closed solid is never taken: most of its rays meet its own
 // material from behind, or all of them meet something from behind and it faces no open space
 // the viewpoints (bake/open_space.h) reach. Otherwise the back is taken when the front is
-// enclosed or its rays leave the scene at least 4 fewer times. The same bytes at any thread
-// count. Returns the triangles turned.
+// enclosed or its rays leave the scene at least 4 fewer times, or, where the sky does not tell
+// them apart, when the front's rays meet something four times nearer (a frame's face against
+// its wall). The same bytes at any thread count. Returns the triangles turned.
 size_t orientLightmapSamples(SurfaceSampleSet& samples, const BvhView& bvh, const TraceSceneView& scene,
                              const std::vector<Viewpoint>& viewpoints);
 

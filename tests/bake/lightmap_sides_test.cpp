@@ -15,21 +15,26 @@ using namespace vl::test;
 
 namespace {
 
+// A box's floor and four walls over [lo, hi], facing in; no top.
+void addBoxFacingIn(Scene& scene, int material, const vec3& lo, const vec3& hi) {
+    const vec3 p000(lo.x, lo.y, lo.z), p100(hi.x, lo.y, lo.z), p010(lo.x, hi.y, lo.z), p110(hi.x, hi.y, lo.z);
+    const vec3 p001(lo.x, lo.y, hi.z), p101(hi.x, lo.y, hi.z), p011(lo.x, hi.y, hi.z), p111(hi.x, hi.y, hi.z);
+    addQuad(scene, "floor", material, p000, p001, p101, p100);
+    addQuad(scene, "wall-x", material, p000, p010, p011, p001);
+    addQuad(scene, "wall+x", material, p100, p101, p111, p110);
+    addQuad(scene, "wall-z", material, p000, p100, p110, p010);
+    addQuad(scene, "wall+z", material, p001, p011, p111, p101);
+}
+
 Scene lidOnABlackBox() {
     Scene scene;
     const int black = addLambert(scene, vec3(0.0f));
     const int lid = addLambert(scene, vec3(0.5f));
     scene.materials[size_t(lid)].doubleSided = true;
     // The box's floor and four walls, facing in; no ceiling: the lid closes it.
-    const vec3 lo(-0.5f, 0.0f, -0.5f), hi(0.5f, 0.4f, 0.5f);
-    const vec3 p000(lo.x, lo.y, lo.z), p100(hi.x, lo.y, lo.z), p010(lo.x, hi.y, lo.z), p110(hi.x, hi.y, lo.z);
-    const vec3 p001(lo.x, lo.y, hi.z), p101(hi.x, lo.y, hi.z), p011(lo.x, hi.y, hi.z), p111(hi.x, hi.y, hi.z);
-    addQuad(scene, "floor", black, p000, p001, p101, p100);
-    addQuad(scene, "wall-x", black, p000, p010, p011, p001);
-    addQuad(scene, "wall+x", black, p100, p101, p111, p110);
-    addQuad(scene, "wall-z", black, p000, p100, p110, p010);
-    addQuad(scene, "wall+z", black, p001, p011, p111, p101);
-    addQuad(scene, "lid", lid, p010, p011, p111, p110);  // normal +Y: its front faces the sky
+    addBoxFacingIn(scene, black, vec3(-0.5f, 0.0f, -0.5f), vec3(0.5f, 0.4f, 0.5f));
+    addQuad(scene, "lid", lid, {-0.5f, 0.4f, -0.5f}, {-0.5f, 0.4f, 0.5f}, {0.5f, 0.4f, 0.5f},
+            {0.5f, 0.4f, -0.5f});  // normal +Y: its front faces the sky
     return scene;
 }
 
@@ -46,6 +51,14 @@ BakedLightmap meshLightmapUnderSky(const Scene& scene, LightmapSide side, const 
         if (lightmap.name.find(mesh) != std::string::npos) return lightmap;
     FAIL("no lightmap named " << mesh);
     return {};
+}
+
+// The mean (green) of a 32² lightmap's middle 4 × 4 texels.
+double centreTexels(const BakedLightmap& lightmap) {
+    double sum = 0.0;
+    for (int y = 14; y < 18; ++y)
+        for (int x = 14; x < 18; ++x) sum += lightmap.total.at(x, y, 1);
+    return sum / 16.0;
 }
 
 // The lid's lightmap: its covered texels' mean and extremes (green).
@@ -115,14 +128,7 @@ TEST_CASE("A rug in a room wound outward: inside holds the top its camera sees, 
     for (LightmapSide side : {LightmapSide::Front, LightmapSide::Inside}) {
         const BakedLightmap lightmap = meshLightmapUnderSky(scene, side, "rug");
         // The middle 4 × 4 texels: 10 cm across, where the form factor changes by < 1%.
-        double sum = 0.0;
-        size_t count = 0;
-        for (int y = 14; y < 18; ++y)
-            for (int x = 14; x < 18; ++x) {
-                sum += lightmap.total.at(x, y, 1);
-                ++count;
-            }
-        const double mean = sum / double(count);
+        const double mean = centreTexels(lightmap);
         INFO(toString(side) << ": centre " << mean << ", the skylight's form factor " << centre);
         if (side == LightmapSide::Front)
             CHECK(mean < 0.01 * centre);  // the underside, a centimetre over a black floor
@@ -143,6 +149,67 @@ TEST_CASE("A double-sided lid on a black box: inside holds its dark underside, f
     // start a hair from the walls' edges and find the crack there (0.2% of L measured).
     CHECK(inside.mean < 1e-3);
     CHECK(inside.highest < 0.01);
+}
+
+namespace {
+
+// A black room [−1, 1] × [0, 2] × [−1, 1] wound inward, with a 1 m skylight in its ceiling and a
+// camera in it. On the wall at z = −1 hangs a double-sided panel (a picture's frame), 1 cm off the
+// plaster, 0.6 m square, wound facing the wall: its front sees the plaster, its back the room.
+Scene panelAgainstAWall() {
+    Scene scene;
+    const int black = addLambert(scene, vec3(0.0f));
+    const int panel = addLambert(scene, vec3(0.5f));
+    scene.materials[size_t(panel)].doubleSided = true;
+    const float s = 1.0f, h = 2.0f, w = 0.5f;
+    addBoxFacingIn(scene, black, vec3(-s, 0.0f, -s), vec3(s, h, s));
+    // The ceiling round the skylight, normals −Y.
+    addQuad(scene, "ceiling-z", black, {-s, h, -s}, {s, h, -s}, {s, h, -w}, {-s, h, -w});
+    addQuad(scene, "ceiling+z", black, {-s, h, w}, {s, h, w}, {s, h, s}, {-s, h, s});
+    addQuad(scene, "ceiling-x", black, {-s, h, -w}, {-w, h, -w}, {-w, h, w}, {-s, h, w});
+    addQuad(scene, "ceiling+x", black, {w, h, -w}, {s, h, -w}, {s, h, w}, {w, h, w});
+    const float z = -s + 0.01f, r = 0.3f, y0 = 0.7f, y1 = 1.3f;
+    addQuad(scene, "panel", panel, {-r, y0, z}, {-r, y1, z}, {r, y1, z}, {r, y0, z});  // normal −Z
+    Camera camera;
+    camera.position = vec3(0.0f, 1.0f, 0.9f);
+    camera.forward = vec3(0.0f, 0.0f, -1.0f);
+    scene.cameras.push_back(camera);
+    return scene;
+}
+
+// The form factor from a point facing +Z to the skylight (the square |x|, |z| ≤ 0.5 at y = 2):
+// ∫ cos θ₁ cos θ₂ / (π r²) dA by the midpoint rule, 400² cells.
+double skylightFormFactor(const vec3& p) {
+    const int n = 400;
+    const double cell = 1.0 / n;
+    double sum = 0.0;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+            const double dx = -0.5 + (i + 0.5) * cell - p.x, dz = -0.5 + (j + 0.5) * cell - p.z, dy = 2.0 - p.y;
+            const double r2 = dx * dx + dy * dy + dz * dz;
+            if (dz > 0.0) sum += dz * dy / (r2 * r2) * cell * cell;
+        }
+    return sum / 3.14159265358979;
+}
+
+}  // namespace
+
+TEST_CASE("A panel wound facing its wall: inside holds the side the room sees, lit through the skylight", "[bake]") {
+    // The room side sees the sky only through the skylight: its centre texels hold L × the form
+    // factor. The side against the plaster sees the black wall a centimetre off, and light
+    // only through the crack round the panel's edge. Neither side sees more than a few of the
+    // sky's rays, so only the wall a centimetre away tells the sides apart.
+    const double centre = skylightFormFactor(vec3(0.0f, 1.0f, -0.99f));
+    const Scene scene = panelAgainstAWall();
+    for (LightmapSide side : {LightmapSide::Front, LightmapSide::Inside}) {
+        const BakedLightmap lightmap = meshLightmapUnderSky(scene, side, "panel");
+        const double mean = centreTexels(lightmap);
+        INFO(toString(side) << ": centre " << mean << ", the skylight's form factor " << centre);
+        if (side == LightmapSide::Front)
+            CHECK(mean < 0.05 * centre);  // the face against the wall
+        else
+            CHECK(mean == Approx(centre).epsilon(0.05));
+    }
 }
 
 TEST_CASE("lightmap-side takes front and inside and names itself when wrong", "[bake]") {
