@@ -114,7 +114,8 @@ nlohmann::json reportJson(const BakeReport& report, const BakeSettings& settings
             json["lightmap_uvs"]["small_charts"].push_back({{"mesh", small.mesh}, {"charts", small.charts}});
     }
     if (report.lightmapSeams) {
-        // Measured on the total as scene.glb carries it, half a texel inside each chart.
+        // Measured on the total as scene.glb carries it, half a texel inside each chart and on
+        // the edge itself (bake/lightmap_seams.h).
         const LightmapSeamReport& seams = *report.lightmapSeams;
         json["lightmap_seams"] = {{"edges", seams.after.edges},
                                   {"length_metres", seams.after.length},
@@ -123,7 +124,9 @@ nlohmann::json reportJson(const BakeReport& report, const BakeSettings& settings
                                   {"mean_relative_jump", seams.after.meanRelative},
                                   {"pooled_relative_jump", seams.after.pooledRelative},
                                   {"before_stitching", seams.before.meanRelative},
-                                  {"before_stitching_pooled", seams.before.pooledRelative}};
+                                  {"before_stitching_pooled", seams.before.pooledRelative},
+                                  {"mean_relative_jump_at_edge", seams.afterAtEdge.meanRelative},
+                                  {"before_stitching_at_edge", seams.beforeAtEdge.meanRelative}};
     }
     json["lightmap_texels"] = report.lightmapTexels;
     json["covered_texels"] = report.coveredTexels;

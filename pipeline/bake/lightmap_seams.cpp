@@ -266,10 +266,10 @@ size_t stitchLightmapSeams(const std::vector<LightmapSeam>& seams, const Image& 
         const int n = pairsAlong(seam);
         for (int k = 0; k < n; ++k) {
             const float t = (static_cast<float>(k) + 0.5f) / static_cast<float>(n);
-            for (float inset : {kSeamInsetTexels, 0.0f}) {
+            {
                 const size_t begin = entries.size();
                 for (int side = 0; side < 2; ++side) {
-                    const Footprint f = footprintAt(pointOn(seam.sides[side], t, inset), width, height);
+                    const Footprint f = footprintAt(pointOn(seam.sides[side], t, 0.0f), width, height);
                     for (size_t j = 0; j < 4; ++j) {
                         if (f.weight[j] == 0.0f) continue;
                         const int32_t v = variable(f.texel[j]);
@@ -375,12 +375,17 @@ LightmapSeamReport finishLightmapSeams(const Scene& scene, const std::vector<uin
                                        Image& direct, Image& indirect, Image& total, bool stitch) {
     LightmapSeamReport report;
     const std::vector<LightmapSeam> seams = findLightmapSeams(scene, meshes, mask.width, mask.height);
-    report.before = measureSeamJump(seams, shippedLightmapTexels(total));
+    const Image before = shippedLightmapTexels(total);
+    report.before = measureSeamJump(seams, before);
+    report.beforeAtEdge = measureSeamJump(seams, before, 0.0f);
     report.after = report.before;
+    report.afterAtEdge = report.beforeAtEdge;
     report.stitched = stitch;
     if (!stitch || seams.empty()) return report;
     report.texelsMoved = stitchLightmapSeams(seams, mask, direct, indirect, total);
-    report.after = measureSeamJump(seams, shippedLightmapTexels(total));
+    const Image after = shippedLightmapTexels(total);
+    report.after = measureSeamJump(seams, after);
+    report.afterAtEdge = measureSeamJump(seams, after, 0.0f);
     return report;
 }
 
@@ -412,6 +417,8 @@ LightmapSeamReport combineSeamReports(const std::vector<LightmapSeamReport>& rep
     }
     out.before = combine(reports, &LightmapSeamReport::before);
     out.after = combine(reports, &LightmapSeamReport::after);
+    out.beforeAtEdge = combine(reports, &LightmapSeamReport::beforeAtEdge);
+    out.afterAtEdge = combine(reports, &LightmapSeamReport::afterAtEdge);
     return out;
 }
 

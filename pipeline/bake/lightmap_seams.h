@@ -17,12 +17,18 @@
 // The figures: the mean of that over all pairs, each weighted by its share of its seam's 3D
 // length; and the pooled ratio Σ w|a − b| / Σ w (a + b)/2, which counts a bright seam more.
 //
-// Stitching (after dilation): the texels that the seams' bilinear reads touch (covered ones
-// and the padding ring beyond a chart's edge) move by a least-squares solve: minimise
+// The jump is measured twice: half a texel in (the reads a texel apart in 3D, where a light
+// that changes fast, as at a smooth-shaded fold, differs by right) and on the edge itself (the
+// one point both sides stand for, where the light is one value: what a viewer shows as a line).
+//
+// Stitching (after dilation): the texels that the seams' bilinear reads on the edge touch
+// (covered ones and the padding ring beyond a chart's edge) move by a least-squares solve:
+// minimise
 //     Σ_pairs (bilinear_a(x) − bilinear_b(x))² + Σ_texels λ (x − baked)²
 // with λ = kStitchCoveredWeight for covered texels (stay near the bake) and
-// kStitchPaddingWeight for padding ones (free to take what the seam needs). The pairs are
-// read at the metric's inset and on the edge itself (what the viewer shows at the line). The
+// kStitchPaddingWeight for padding ones (free to take what the seam needs). The pairs are read
+// on the edge only: pairs half a texel in as well pulled a crease's dark texels to the bright
+// side of a fold (the grey-white room's sofa, 5 to 13 times its light, docs/accuracy.md). The
 // solve is linear in the baked values, so direct and indirect are solved and the total is
 // their sum again. Conjugate gradients with a diagonal preconditioner, serial: the same
 // bytes at any thread count (and in a cluster's merge, which calls the same finishLightmap).
@@ -89,8 +95,10 @@ size_t stitchLightmapSeams(const std::vector<LightmapSeam>& seams, const Image& 
 struct LightmapSeamReport {
     bool stitched = false;
     size_t texelsMoved = 0;
-    SeamJump before;
-    SeamJump after;  // = before when not stitched
+    SeamJump before;       // half a texel in (kSeamInsetTexels)
+    SeamJump after;        // = before when not stitched
+    SeamJump beforeAtEdge;  // on the edge itself
+    SeamJump afterAtEdge;
 };
 
 // An atlas's seams found, measured on its total as it ships, stitched when `stitch` says and

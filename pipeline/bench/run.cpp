@@ -282,8 +282,11 @@ BenchResult runBench(const BenchOptions& options) {
                          percentOrDash(p.lightmapIndirect).c_str(), p.imageSeconds, percentOrDash(p.image).c_str(),
                          percentOrDash(p.lightmapped).c_str());
         if (!options.quiet && p.ok && p.seams)
-            std::fprintf(stderr, "bench: %s %s: %zu lightmap seams, mean jump %.2f%% (%.2f%% before stitching)\n",
+            std::fprintf(stderr,
+                         "bench: %s %s: %zu lightmap seams, mean jump on the edge %.2f%% (%.2f%% before stitching), "
+                         "half a texel in %.2f%% (%.2f%%)\n",
                          spec.method.c_str(), spec.label.c_str(), p.seams->after.edges,
+                         100.0 * p.seams->afterAtEdge.meanRelative, 100.0 * p.seams->beforeAtEdge.meanRelative,
                          100.0 * p.seams->after.meanRelative, 100.0 * p.seams->before.meanRelative);
         result.points.push_back(std::move(p));
     }
