@@ -10,11 +10,14 @@
 // its samples, each with its truth. --classes OUT.exr writes, per pixel, the share of its samples
 // whose bilinear read reaches a texel that holds the other side of the surface (R), another face
 // of it (normals over 45° apart, G), or padding or another mesh (B), and OUT_materials.exr the
-// material of each pixel's main sample: an error heat map split by cause (docs/accuracy.md). An
-// accuracy measurement, not a test.
+// material of each pixel's main sample: an error heat map split by cause (docs/accuracy.md).
+// --truth-lightmap OUT.exr writes the lightmap-lit view from lightmaps whose every texel the path
+// tracer lit (--spp paths a sample, --seed), dilated and stitched as the bake's: what the
+// atlas, its texels and the bilinear read alone cost against the truth (two seeds give their
+// noise). An accuracy measurement, not a test.
 //
 //   build/accuracy/accuracy_pixel JOB.json|SCENE.gltf [--pixel X,Y …] [--texel X,Y …] [--classes OUT.exr]
-//                                 [--spp N] [name=value …]
+//                                 [--truth-lightmap OUT.exr] [--spp N] [--seed S] [name=value …]
 #include "accuracy_job.h"
 #include "bake/bake.h"
 #include "bake/bake_job.h"
@@ -74,7 +77,8 @@ int main(int argc, char** argv) {
         if (argc < 2)
             throw SettingsError("usage: accuracy_pixel JOB.json|SCENE.gltf --pixel X,Y [--pixel X,Y …] [--spp N] [name=value …]");
         int spp = 1024;
-        std::string classesPath;
+        std::string classesPath, truthLightmapPath;
+        uint64_t seed = 0;
         std::vector<std::pair<int, int>> pixels, texels;
         SettingAssignments assignments;
         for (int i = 2; i < argc; ++i) {
@@ -85,6 +89,10 @@ int main(int argc, char** argv) {
                 texels.push_back(parsePoint(arg, argv[++i]));
             } else if (arg == "--classes" && i + 1 < argc) {
                 classesPath = argv[++i];
+            } else if (arg == "--truth-lightmap" && i + 1 < argc) {
+                truthLightmapPath = argv[++i];
+            } else if (arg == "--seed" && i + 1 < argc) {
+                seed = std::stoull(argv[++i]);
             } else if (arg == "--spp" && i + 1 < argc) {
                 spp = std::max(1, std::stoi(argv[++i]));
             } else {
@@ -93,7 +101,8 @@ int main(int argc, char** argv) {
                 assignments.emplace_back(arg.substr(0, eq), arg.substr(eq + 1));
             }
         }
-        if (pixels.empty() && texels.empty() && classesPath.empty()) throw SettingsError("--pixel: name at least one pixel, or --classes OUT.exr");
+        if (pixels.empty() && texels.empty() && classesPath.empty() && truthLightmapPath.empty())
+            throw SettingsError("--pixel: name at least one pixel, or --classes OUT.exr, or --truth-lightmap OUT.exr");
         BakeJob job = accuracyJob(argv[1], assignments);
         job.settings.quiet = true;
         job.settings.outputs.grids = false;
@@ -108,6 +117,7 @@ int main(int argc, char** argv) {
             Image shipped;
             Image shaded;  // direct + indirect as shaded, before dilation and seam stitching
             Image shadedDirect;
+            std::vector<uint32_t> meshes;
         };
         std::vector<Baked> baked;
         std::vector<int> atlasOf(scene.meshes.size(), -1);
@@ -120,7 +130,7 @@ int main(int argc, char** argv) {
                 if (!scene.meshes[m].uv1.empty()) atlasOf[m] = int(baked.size());
             Image shaded = lit.direct;
             for (size_t k = 0; k < shaded.pixels.size(); ++k) shaded.pixels[k] += lit.indirect.pixels[k];
-            baked.push_back({std::move(atlas), shippedLightmapTexels(lightmap.total), std::move(shaded), lit.direct});
+            baked.push_back({std::move(atlas), shippedLightmapTexels(lightmap.total), std::move(shaded), lit.direct, lightmap.meshes});
         }
         const Camera camera = bakeCameras(scene, job.settings).front();
         const CameraReceivers receivers = bakeCameraReceivers(
@@ -206,6 +216,19 @@ int main(int argc, char** argv) {
                 std::printf("  sample at (%.3f, %.3f, %.3f) n (%.2f, %.2f, %.2f) weight %.3f on %s: truth %.4f (direct %.4f)\n", own[k].position.x,
                             own[k].position.y, own[k].position.z, own[k].normal.x, own[k].normal.y, own[k].normal.z, own[k].weight,
                             meshOf(scene, tracing.triangles, own[k].triangle).c_str(), grey(truths[k]), grey(directs[k]));
+        }
+        if (!truthLightmapPath.empty()) {
+            std::vector<ShippedLightmap> truths;
+            for (const Baked& b : baked) {
+                PathTracerSettings traceSettings;
+                traceSettings.samplesPerPixel = spp;
+                traceSettings.seed = seed;
+                traceSettings.quiet = true;
+                const TraceResult traced = traceIrradiance(tracing.traceScene, tracing.bvh, b.atlas.receivers, traceSettings);
+                const BakedLightmap truth = finishLightmap(b.atlas, traced.direct, traced.indirect, scene, job.settings);
+                truths.push_back({b.meshes, shippedLightmapTexels(truth.total)});
+            }
+            writeExr(renderLightmapImage(receivers, scene, tracing.triangles, truths), truthLightmapPath);
         }
         if (!classesPath.empty()) {
             // Per pixel, the share of its samples whose bilinear read reaches a texel that holds the
