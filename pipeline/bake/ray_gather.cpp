@@ -225,7 +225,9 @@ std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& m
     // of its vertices nearer than nearField to the last reflecting its lights and what the next
     // ray brings back, the first farther one (or the kNearFieldBounces-th) read from its voxels.
     // Both sides of a surface reflect, as in the path tracer.
-    const float nearField = extras ? extras->nearField : 0.0f;
+    // Only where every hit's lights can be taken by a shadow ray: without lightsAtHits a
+    // scene's lights live in the faces a traced hit no longer reads.
+    const float nearField = extras && (scene.lightCount == 0 || lights) ? extras->nearField : 0.0f;
     const auto tracedOn = [&](const Ray& first, const Hit& firstHit, Pcg32& lightDraws, Pcg32& nearDraws,
                               IndexLeafCache& leaves, uint64_t& traced) {
         vec3 L(0.0f), throughput(1.0f);

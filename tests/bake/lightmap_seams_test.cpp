@@ -172,7 +172,7 @@ TEST_CASE("Stitching makes a step across a seam one value on the edge, in direct
                 change += stitchedTotal.at(x, y) - total.at(x, y);
                 movement += std::abs(stitchedTotal.at(x, y) - total.at(x, y));
             }
-    CHECK(movement > 0.0);
+    CHECK(movement > 0.3);  // the edge texels' share of the step (0.59 measured)
     CHECK(std::abs(change) < 0.02 * movement);
     // The wall's chart (no seam) and the charts' far sides keep their baked values.
     CHECK(stitchedTotal.rgb(28, 4) == total.rgb(28, 4));

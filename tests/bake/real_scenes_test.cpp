@@ -47,14 +47,14 @@ ErrorMetrics lightmapLitAgainst(const std::string& job, const SettingAssignments
 
 TEST_CASE("The grey-white room's lightmap-lit view against Cycles: the transport alone, every material Lambert", "[bake]") {
     VL_SKIP_WITHOUT_SHARED();
-    // Cycles' own noise at 4096 spp is 3.4% per pixel. The lightmap-lit view was 34.0% from it
-    // when a chart could be merged across a hard edge (a sunlit sill's top read into its shaded
-    // front, docs/accuracy.md), 30.7% since; its means are within 1% per channel.
+    // Cycles' own noise at 4096 spp is 3.4% per pixel. A lightmap whose every texel holds the
+    // path tracer's light is itself about 27% from it at this atlas (docs/accuracy.md, the
+    // floor): the bound is that and two points. The means are within 2% per channel.
     const ErrorMetrics e = lightmapLitAgainst(sharedDir() + "/scenes/grey-white-room/grey_white_room.json", {{"materials", "lambert"}},
                                               sourceDir() + "/tests/reference/grey-white-room/grey_white_room_render_lambert_4096spp.exr",
                                               "gwr-cycles");
     INFO("lightmap-lit view " << e.relativeRmse);
-    CHECK(e.relativeRmse < 0.325);
+    CHECK(e.relativeRmse < 0.29);
     for (int c = 0; c < 3; ++c) CHECK(e.meanTest[c] == Approx(e.meanReference[c]).epsilon(0.02));
 }
 

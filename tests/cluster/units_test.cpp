@@ -139,7 +139,7 @@ TEST_CASE("A lightmap whose seams are stitched merges as its local bake", "[clus
     CHECK(local.lightmapSeams->after.edges == 1);
     CHECK(local.lightmapSeams->stitched);
     CHECK(local.lightmapSeams->texelsMoved > 0);
-    CHECK(local.lightmapSeams->after.meanRelative < local.lightmapSeams->before.meanRelative);
+    CHECK(local.lightmapSeams->afterAtEdge.meanRelative < local.lightmapSeams->beforeAtEdge.meanRelative);
 
     job.outputDir = (root / "split").string();
     const std::string work = (root / "work").string();
