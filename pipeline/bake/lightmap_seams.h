@@ -28,7 +28,7 @@
 // with λ = kStitchCoveredWeight for covered texels (stay near the bake) and
 // kStitchPaddingWeight for padding ones (free to take what the seam needs). The pairs are read
 // on the edge only: pairs half a texel in as well pulled a crease's dark texels to the bright
-// side of a fold (the grey-white room's sofa, 5 to 13 times its light, docs/accuracy.md). The
+// side of a fold (the grey-white room's sofa, docs/seams.md). The
 // solve is linear in the baked values, so direct and indirect are solved and the total is
 // their sum again. Conjugate gradients with a diagonal preconditioner, serial: the same
 // bytes at any thread count (and in a cluster's merge, which calls the same finishLightmap).
