@@ -484,11 +484,9 @@ ReceiverLighting ReceiverShading::shadeAtlasRows(const LightmapAtlas& given, int
         texels.direct.skyAtSamples = false;
         texels.gatherSky = skyInRecords;
         if (!bright_.lightsAtHits.empty()) texels.lightsAtHits = &bright_.lightsAtHits;
-        // The near field traces a hit's light on from the full faces and the lights at hits:
-        // not where bright patches took part of the faces' light away.
-        const bool allLightAtHits = bright_.patches.empty() &&
-                                    (tracing_.traceScene.view().lightCount == 0 || texels.lightsAtHits);
-        if (allLightAtHits) texels.nearField = settings_.nearFieldVoxels * mipView_.voxelSize;
+        // The near field traces a hit's light on from the full faces: not where bright patches
+        // took part of their light away (the gather itself needs the lights at hits).
+        if (bright_.patches.empty()) texels.nearField = settings_.nearFieldVoxels * mipView_.voxelSize;
         const TexelGather gathered = gatherAtlasTexels(atlas, rowBegin, rowEnd, &lit.direct, mipView_, bright_.restFaces,
                                                        bright_, tracing_.bvh.view(), tracing_.traceScene.view(), texels);
         for (size_t k = 0; k < lit.direct.pixels.size(); ++k) lit.direct.pixels[k] += gathered.sky.pixels[k];
