@@ -428,6 +428,13 @@ CameraReceivers bakeCameraReceivers(const TraceScene& scene, const Bvh& bvh, con
     return buildCameraReceivers(scene, bvh, camera, settings.imageSubsamples, kEmissionSubsamples, true);
 }
 
+Image bakeLightmapImage(const TraceScene& trace, const Bvh& bvh, const CameraModel& camera, const Scene& scene,
+                        const SceneTriangles& triangles, const BakeSettings& settings,
+                        const std::vector<ShippedLightmap>& lightmaps) {
+    return renderLightmapImage(bakeCameraReceivers(trace, bvh, camera, settings), trace, bvh, camera,
+                               settings.lightmapImageSubsamples, scene, triangles, lightmaps);
+}
+
 ReceiverShading::ReceiverShading(const ReceiverScene& tracing, const RadianceMips& mips, const IrradianceCache& cache,
                                  const BrightPatchSplit& bright, const BakeSettings& settings, bool onGpu)
     : tracing_(tracing),
@@ -539,10 +546,9 @@ void addLightmapImages(const Scene& scene, const ReceiverScene& tracing, const B
         shipped.push_back({lightmap.meshes, shippedLightmapTexels(lightmap.total)});
     const std::vector<Camera> cameras = bakeCameras(scene, settings);
     for (size_t c = 0; c < cameras.size() && c < result.images.size(); ++c) {
-        // The receivers of shadeCamera again: the same rays, so the two images compare pixel for pixel.
         const CameraModel model = makeCameraModel(cameras[c], settings.imageWidth, settings.imageHeight);
-        const CameraReceivers receivers = bakeCameraReceivers(tracing.traceScene, tracing.bvh, model, settings);
-        result.images[c].lightmapped = renderLightmapImage(receivers, scene, tracing.triangles, shipped);
+        result.images[c].lightmapped =
+            bakeLightmapImage(tracing.traceScene, tracing.bvh, model, scene, tracing.triangles, settings, shipped);
     }
 }
 

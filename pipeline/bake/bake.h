@@ -7,6 +7,7 @@
 
 #include "bake/bake_settings.h"
 #include "bake/bright_patches.h"
+#include "bake/lightmap_image.h"
 #include "bake/lightmap_seams.h"
 #include "bake/ray_gather.h"
 #include "bake/receivers.h"
@@ -122,6 +123,12 @@ std::vector<Camera> bakeCameras(const Scene& scene, const BakeSettings& settings
 // finer grid (bake.cpp).
 CameraReceivers bakeCameraReceivers(const TraceScene& scene, const Bvh& bvh, const CameraModel& camera,
                                     const BakeSettings& settings);
+
+// A camera's lightmap-lit image (bake/lightmap_image.h) from `lightmaps`: what is seen
+// directly as in bakeCameraReceivers, settings.lightmapImageSubsamples² lightmap reads a pixel.
+Image bakeLightmapImage(const TraceScene& trace, const Bvh& bvh, const CameraModel& camera, const Scene& scene,
+                        const SceneTriangles& triangles, const BakeSettings& settings,
+                        const std::vector<ShippedLightmap>& lightmaps);
 
 // Receivers lit from the voxel stages' mips and gather.
 class ReceiverShading {

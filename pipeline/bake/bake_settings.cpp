@@ -205,6 +205,8 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.outputs.images = parseBoolSetting("images", v); }},
         {"lightmap-image", "write image_lightmapped.exr and .png: each camera lit by its lightmaps as scene.glb carries them, albedo x lightmap + emission, as the viewer shows it; needs lightmaps and images (default true)",
          [](S& s, const std::string& v) { s.outputs.lightmapImage = parseBoolSetting("lightmap-image", v); }},
+        {"lightmap-image-subsamples", "n x n primary rays per pixel of image_lightmapped, each reading the lightmap at its own hit and averaged over the pixel, as the Cycles references filter theirs; 1: one read at the pixel's centre, as the viewer's page at the image's size (default 4)",
+         [](S& s, const std::string& v) { s.lightmapImageSubsamples = parseIntSetting("lightmap-image-subsamples", v, 1, 16); }},
         {"grids", "write grids.vdb (default true)",
          [](S& s, const std::string& v) { s.outputs.grids = parseBoolSetting("grids", v); }},
         {"lightmap-uvs", "generate TEXCOORD_1 charts for a scene none of whose meshes has one (default true)",
@@ -309,6 +311,8 @@ std::string describeBakeSettings(const BakeSettings& s) {
     if (!s.lightmapStitch) out << ", lightmap-stitch=false";
     if (!s.hitLightExact) out << ", hit-light=voxels";
     if (s.nearFieldVoxels != BakeSettings{}.nearFieldVoxels) out << ", near-field=" << s.nearFieldVoxels;
+    if (s.lightmapImageSubsamples != BakeSettings{}.lightmapImageSubsamples)
+        out << ", lightmap-image-subsamples=" << s.lightmapImageSubsamples;
     if (s.filesOutsideScene) out << ", files-outside-scene=true";
     if (!s.voxel.ownFrame) out << ", grid-frame=world";
     for (size_t g = 0; g < s.lightmap.atlases.size(); ++g) {

@@ -140,6 +140,9 @@ struct BakeSettings {
     int imageWidth = 256;
     int imageHeight = 256;
     int imageSubsamples = 2;  // n × n primary rays per pixel
+    // n × n primary rays per pixel of the lightmap-lit image, each reading the lightmap at its
+    // own hit: the pixel's box, as the references filter theirs (bake/lightmap_image.h).
+    int lightmapImageSubsamples = 4;
     BakeOutputs outputs;
     // TEXCOORD_1 for scenes that have none (unwrap/lightmap_uvs.h; bake.cpp needsLightmapUvs).
     bool generateLightmapUvs = true;

@@ -1,12 +1,17 @@
 #include "bake/lightmap_image.h"
 
+#include "core/error.h"
 #include "export/lightmap_encoding.h"
+#include "trace/bvh_traverse.h"
+#include "trace/trace_scene.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace vl {
 
@@ -53,34 +58,44 @@ vec3 sampleLightmap(const Image& texels, vec2 uv) {
     return glm::mix(top, bottom, ay);
 }
 
-Image renderLightmapImage(const CameraReceivers& camera, const Scene& scene, const SceneTriangles& triangles,
-                          const std::vector<ShippedLightmap>& lightmaps) {
+Image renderLightmapImage(const CameraReceivers& camera, const TraceScene& trace, const Bvh& bvh,
+                          const CameraModel& model, int raysPerAxis, const Scene& scene,
+                          const SceneTriangles& triangles, const std::vector<ShippedLightmap>& lightmaps) {
+    if (raysPerAxis < 1 || raysPerAxis > 16)
+        throw SettingsError("lightmap-image-subsamples: " + std::to_string(raysPerAxis) + " is outside 1..16");
+    if (camera.emission.width != model.width || camera.emission.height != model.height)
+        throw std::invalid_argument("renderLightmapImage: the receivers are not the camera's");
     // Which lightmap each mesh reads (-1: none, the viewer's unlit level).
     std::vector<int> lightmapOf(scene.meshes.size(), -1);
     for (size_t l = 0; l < lightmaps.size(); ++l)
         for (uint32_t m : lightmaps[l].meshes)
             if (m < scene.meshes.size() && !scene.meshes[m].uv1.empty()) lightmapOf[m] = int(l);
 
-    const SurfaceSampleSet& receivers = camera.receivers;
+    const TraceSceneView view = trace.view();
+    const BvhView bvhView = bvh.view();
+    const int n = raysPerAxis;
+    const float weight = 1.0f / float(n * n);
     Image out = camera.emission;
-    tbb::parallel_for(tbb::blocked_range<int>(0, receivers.height), [&](const tbb::blocked_range<int>& rows) {
+    tbb::parallel_for(tbb::blocked_range<int>(0, model.height), [&](const tbb::blocked_range<int>& rows) {
         for (int y = rows.begin(); y < rows.end(); ++y)
-            for (int x = 0; x < receivers.width; ++x) {
-                const size_t element = size_t(y) * size_t(receivers.width) + size_t(x);
+            for (int x = 0; x < model.width; ++x) {
                 vec3 reflected(0.0f);
-                for (uint32_t k = receivers.begin[element]; k < receivers.begin[element + 1]; ++k) {
-                    const SurfaceSample& s = receivers.samples[k];
-                    vec3 light(kUnlitLight);
-                    if (s.triangle < triangles.meshIndex.size()) {
-                        const uint32_t m = triangles.meshIndex[s.triangle];
+                for (int j = 0; j < n; ++j)
+                    for (int i = 0; i < n; ++i) {
+                        // The film grid of buildCameraReceivers (bake/receivers.cpp).
+                        const Ray ray = pinholeRay(model, vec2(x + (i + 0.5f) / n, y + (j + 0.5f) / n));
+                        Hit hit;
+                        if (!intersectClosest(bvhView, ray, hit)) continue;  // the sky: in the emission
+                        const SurfaceHit h = surfaceAt(view, hit.triangle, hit.b1, hit.b2);
+                        vec3 light(kUnlitLight);
+                        const uint32_t m = triangles.meshIndex[hit.triangle];
                         if (lightmapOf[m] >= 0) {
-                            const vec2 uv = lightmapUvAt(scene.meshes[m], triangles.localIndex[s.triangle],
-                                                  &triangles.vertices[3 * size_t(s.triangle)], s.position);
+                            const vec2 uv = lightmapUvAt(scene.meshes[m], triangles.localIndex[hit.triangle],
+                                                         &triangles.vertices[3 * size_t(hit.triangle)], h.position);
                             light = sampleLightmap(lightmaps[size_t(lightmapOf[m])].texels, uv);
                         }
+                        reflected += weight * baseColorAt(view, h) * light;
                     }
-                    reflected += s.weight * s.albedo * light;
-                }
                 out.setRgb(x, y, out.rgb(x, y) + reflected);
             }
     });

@@ -1,19 +1,21 @@
 // The lightmap-lit image: a camera as an engine shows the bake, in linear light.
 //
-// Takes a camera's receivers (receivers.h buildCameraReceivers: the primary rays, pixel
-// sub-samples and emission the bake's own image is shaded from), the scene's TEXCOORD_1 and
-// the lightmaps as they ship. Gives, per pixel,
-//     emission + Σ weight · albedo · light
-// over the pixel's samples, where `light` is:
-//   - for a sample on a mesh baked into a lightmap: that lightmap read bilinearly at the
-//     sample's TEXCOORD_1, texel centres at (i + ½) / size, clamped at the image's edges
+// Takes a camera (its model and the receivers the bake's own image is shaded from, for the
+// emission and sky seen directly), the scene's TEXCOORD_1 and the lightmaps as they ship.
+// Gives, per pixel,
+//     emission + (1/n²) Σ albedo · light
+// over an n × n grid of primary rays (the receivers' film grid, each ray at its own hit),
+// where `light` is:
+//   - for a hit on a mesh baked into a lightmap: that lightmap read bilinearly at the hit's
+//     TEXCOORD_1, texel centres at (i + ½) / size, clamped at the image's edges
 //     (tools/viewer/viewer.js lightmapAt);
 //   - for any other surface (an emitter, a mesh without TEXCOORD_1, a mesh no atlas took):
 //     kUnlitLight, what the viewer shows there (viewer.js UNLIT_LEVEL).
-// So the image differs from the bake's own only in where the light comes from: texels, not
-// the receivers' gather. A sample stands for the rays of its pixel that hit its triangle
-// (their hits merged, receivers.h), and reads the lightmap once at their centroid, as it is
-// shaded once in the bake's image.
+// So it differs from the bake's own image only in where the light comes from: texels, not the
+// receivers' gather. The n² reads a pixel are its 1-pixel box, as the Cycles references
+// filter theirs and as a display of finer pixels shows the lightmap: where light changes
+// inside a pixel (a sun edge, a mullion's shadow) the pixel shows its mean, not one side of
+// it. n = 1 is one read at the pixel's centre, what the viewer's page shows at that size.
 //
 // "As they ship": shippedLightmapTexels gives the texels scene.glb carries, the dilated total
 // through 8-bit RGBM and back (export/lightmap_encoding.h), which is what the viewer decodes,
@@ -24,6 +26,7 @@
 #include "core/image.h"
 #include "scene/scene.h"
 #include "trace/bvh.h"
+#include "trace/camera.h"
 
 #include <cstdint>
 #include <vector>
@@ -48,8 +51,13 @@ vec2 lightmapUvAt(const Mesh& mesh, uint32_t localTriangle, const vec3* corners,
 // The lightmap at TEXCOORD_1 `uv`, bilinear between texel centres, clamped to the edge.
 vec3 sampleLightmap(const Image& texels, vec2 uv);
 
-// `triangles` and the samples' triangle ids follow gatherTriangles(scene).
-Image renderLightmapImage(const CameraReceivers& camera, const Scene& scene, const SceneTriangles& triangles,
-                          const std::vector<ShippedLightmap>& lightmaps);
+class TraceScene;
+
+// `camera`: the receivers of `model` (their emission image: what is seen directly);
+// `raysPerAxis` n in 1..16 (SettingsError otherwise); `triangles` follow gatherTriangles(scene),
+// as `trace` and `bvh` do.
+Image renderLightmapImage(const CameraReceivers& camera, const TraceScene& trace, const Bvh& bvh,
+                          const CameraModel& model, int raysPerAxis, const Scene& scene,
+                          const SceneTriangles& triangles, const std::vector<ShippedLightmap>& lightmaps);
 
 }  // namespace vl

@@ -169,10 +169,8 @@ void runPathPoint(const BenchOptions& options, const Comparer& comparer, BenchPo
         options.base.settings.outputs.lightmapImage) {
         Image texels = lightmap.beauty;
         dilatePadding(texels, traced->atlas->mask);
-        const CameraReceivers receivers =
-            bakeCameraReceivers(traced->trace, traced->bvh, *traced->camera, options.base.settings);
-        const Image lit = renderLightmapImage(receivers, traced->scene, traced->triangles,
-                                              {{traced->atlas->meshes, shippedLightmapTexels(texels)}});
+        const Image lit = bakeLightmapImage(traced->trace, traced->bvh, *traced->camera, traced->scene, traced->triangles,
+                                            options.base.settings, {{traced->atlas->meshes, shippedLightmapTexels(texels)}});
         writeExr(lit, (dir / "image_lightmapped.exr").string());
     }
     comparer.fromFiles(p, dir, "lightmap", "image");

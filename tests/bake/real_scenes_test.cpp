@@ -47,25 +47,26 @@ ErrorMetrics lightmapLitAgainst(const std::string& job, const SettingAssignments
 
 TEST_CASE("The grey-white room's lightmap-lit view against Cycles: the transport alone, every material Lambert", "[bake]") {
     VL_SKIP_WITHOUT_SHARED();
-    // Cycles' own noise at 4096 spp is 3.4% per pixel. A lightmap whose every texel holds the
-    // path tracer's light is itself about 21% from it at this atlas (docs/accuracy.md, the
-    // floor); the bake measured 27.1%, and the bound keeps it there. The means are within 2%
+    // Cycles' own noise at 4096 spp is 3.4% per pixel. The view averages 4 × 4 reads a pixel,
+    // as Cycles' 1-pixel box does (bake/lightmap_image.h). A lightmap whose every texel holds
+    // the path tracer's light is itself far from Cycles at this atlas (docs/accuracy.md, the
+    // floor); the bake measured 22.9%, and the bound keeps it there. The means are within 2%
     // per channel.
     const ErrorMetrics e = lightmapLitAgainst(sharedDir() + "/scenes/grey-white-room/grey_white_room.json", {{"materials", "lambert"}},
                                               sourceDir() + "/tests/reference/grey-white-room/grey_white_room_render_lambert_4096spp.exr",
                                               "gwr-cycles");
     INFO("lightmap-lit view " << e.relativeRmse);
-    CHECK(e.relativeRmse < 0.29);
+    CHECK(e.relativeRmse < 0.25);
     for (int c = 0; c < 3; ++c) CHECK(e.meanTest[c] == Approx(e.meanReference[c]).epsilon(0.02));
 }
 
 TEST_CASE("The classroom's lightmap-lit view against Cycles' render of its camera", "[bake]") {
     // tests/reference/classroom: Cycles 4 × 1024 spp of the bake's own scene.glb, the job's sky,
-    // sun and one-sided lamps; 2.0% noise per pixel. Measured 8.6% (8.4% less that noise), means
-    // within 0.7% per channel.
+    // sun and one-sided lamps; 2.0% noise per pixel. Measured 7.1% (6.8% less that noise) with
+    // the view's 4 × 4 reads a pixel; the bound is issue 34's goal of 8%, the means within 2%.
     const std::string dir = sourceDir() + "/tests/reference/classroom/";
     const ErrorMetrics e = lightmapLitAgainst(dir + "classroom_baked.json", {}, dir + "classroom_render_4096spp.exr", "classroom-render");
     INFO("lightmap-lit view " << e.relativeRmse);
-    CHECK(e.relativeRmse < 0.10);
+    CHECK(e.relativeRmse < 0.08);
     for (int c = 0; c < 3; ++c) CHECK(e.meanTest[c] == Approx(e.meanReference[c]).epsilon(0.02));
 }

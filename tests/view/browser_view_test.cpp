@@ -235,7 +235,7 @@ TEST_CASE("The viewer page in Chromium shows the bake's lightmap-lit image, code
     // block left without TEXCOORD_1 (no lightmap: the viewer's unlit level), baked at 128 × 128;
     // the page's capture at exposure 0 against image_lightmapped.png, which the bake encodes as
     // the page does (the sRGB curve, clamped, 8 bits). Pixels away from edges (the page reads
-    // one point at a pixel's centre, the bake its 2 × 2 rays) must be within kCodeTolerance
+    // one point at a pixel's centre, the bake its 4 × 4 rays) must be within kCodeTolerance
     // codes, and their mean difference under a quarter of a code. The same comparison with the
     // image a page would show that read the lightmap upside down, or did not read it, fails by far.
     VL_SKIP_WITHOUT_CHROMIUM();
@@ -320,11 +320,10 @@ TEST_CASE("The viewer page in Chromium shows the bake's lightmap-lit image, code
     REQUIRE(shipped.size() == 2);
     const std::vector<Camera> cameras = bakeCameras(scene, job.settings);
     REQUIRE(cameras.size() == 1);
-    const CameraReceivers receivers =
-        bakeCameraReceivers(stages.tracing->traceScene, stages.tracing->bvh,
-                            makeCameraModel(cameras[0], job.settings.imageWidth, job.settings.imageHeight), job.settings);
+    const CameraModel model = makeCameraModel(cameras[0], job.settings.imageWidth, job.settings.imageHeight);
     const auto render = [&](const std::vector<ShippedLightmap>& lightmaps) {
-        return renderLightmapImage(receivers, scene, stages.tracing->triangles, lightmaps);
+        return bakeLightmapImage(stages.tracing->traceScene, stages.tracing->bvh, model, scene, stages.tracing->triangles,
+                                 job.settings, lightmaps);
     };
     // The same scene and rays as the bake's: its own image again.
     const Image again = render(shipped);

@@ -100,11 +100,12 @@ int main(int argc, char** argv) {
         }
         const Camera camera = bakeCameras(scene, job.settings).front();
         const BakedImage image = shading.shadeCamera(camera);
-        const CameraReceivers receivers =
-            bakeCameraReceivers(stages.tracing->traceScene, stages.tracing->bvh,
-                                makeCameraModel(camera, job.settings.imageWidth, job.settings.imageHeight), job.settings);
-        const Image rgbm = renderLightmapImage(receivers, scene, stages.tracing->triangles, shipped);
-        const Image linear = renderLightmapImage(receivers, scene, stages.tracing->triangles, floats);
+        const CameraModel model = makeCameraModel(camera, job.settings.imageWidth, job.settings.imageHeight);
+        const ReceiverScene& tracing = *stages.tracing;
+        const Image rgbm =
+            bakeLightmapImage(tracing.traceScene, tracing.bvh, model, scene, tracing.triangles, job.settings, shipped);
+        const Image linear =
+            bakeLightmapImage(tracing.traceScene, tracing.bvh, model, scene, tracing.triangles, job.settings, floats);
         std::printf("%s, camera '%s', %d x %d, voxel size %.4g m\n", job.scenePath.c_str(), camera.name.c_str(),
                     image.beauty.width, image.beauty.height, stages.result.voxels.voxelSize);
         report("lightmap-lit (RGBM, as shipped)", rgbm, image.beauty);

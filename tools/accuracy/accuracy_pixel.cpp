@@ -14,10 +14,14 @@
 // --truth-lightmap OUT.exr writes the lightmap-lit view from lightmaps whose every texel the path
 // tracer lit (--spp paths a sample, --seed), dilated and stitched as the bake's: what the
 // atlas, its texels and the bilinear read alone cost against the truth (two seeds give their
-// noise). An accuracy measurement, not a test.
+// noise), and beside it OUT_texels_<atlas>.exr, the truth's texels as shipped. With
+// --truth-texels T.exr[,T2.exr …] (one file an atlas, in the bake's order) those texels are
+// read instead of traced: the same truth rendered again at other view settings
+// (lightmap-image-subsamples). An accuracy measurement, not a test.
 //
 //   build/accuracy/accuracy_pixel JOB.json|SCENE.gltf [--pixel X,Y …] [--texel X,Y …] [--classes OUT.exr]
-//                                 [--truth-lightmap OUT.exr] [--spp N] [--seed S] [name=value …]
+//                                 [--truth-lightmap OUT.exr [--truth-texels T.exr,…]] [--spp N] [--seed S]
+//                                 [name=value …]
 #include "accuracy_job.h"
 #include "bake/bake.h"
 #include "bake/bake_job.h"
@@ -77,7 +81,7 @@ int main(int argc, char** argv) {
         if (argc < 2)
             throw SettingsError("usage: accuracy_pixel JOB.json|SCENE.gltf --pixel X,Y [--pixel X,Y …] [--spp N] [name=value …]");
         int spp = 1024;
-        std::string classesPath, truthLightmapPath;
+        std::string classesPath, truthLightmapPath, truthTexelsList;
         uint64_t seed = 0;
         std::vector<std::pair<int, int>> pixels, texels;
         SettingAssignments assignments;
@@ -91,6 +95,8 @@ int main(int argc, char** argv) {
                 classesPath = argv[++i];
             } else if (arg == "--truth-lightmap" && i + 1 < argc) {
                 truthLightmapPath = argv[++i];
+            } else if (arg == "--truth-texels" && i + 1 < argc) {
+                truthTexelsList = argv[++i];
             } else if (arg == "--seed" && i + 1 < argc) {
                 seed = std::stoull(argv[++i]);
             } else if (arg == "--spp" && i + 1 < argc) {
@@ -218,8 +224,26 @@ int main(int argc, char** argv) {
                             meshOf(scene, tracing.triangles, own[k].triangle).c_str(), grey(truths[k]), grey(directs[k]));
         }
         if (!truthLightmapPath.empty()) {
+            std::vector<std::string> givenTexels;
+            for (size_t from = 0; !truthTexelsList.empty() && from <= truthTexelsList.size();) {
+                const size_t comma = std::min(truthTexelsList.find(',', from), truthTexelsList.size());
+                givenTexels.push_back(truthTexelsList.substr(from, comma - from));
+                from = comma + 1;
+            }
+            if (!givenTexels.empty() && givenTexels.size() != baked.size())
+                throw SettingsError("--truth-texels: " + std::to_string(givenTexels.size()) + " files for " +
+                                    std::to_string(baked.size()) + " atlases");
+            const std::string stem = truthLightmapPath.substr(0, truthLightmapPath.size() - 4);
             std::vector<ShippedLightmap> truths;
-            for (const Baked& b : baked) {
+            for (size_t a = 0; a < baked.size(); ++a) {
+                const Baked& b = baked[a];
+                if (!givenTexels.empty()) {
+                    Image texels = readImage(givenTexels[a]);
+                    if (texels.width != b.shipped.width || texels.height != b.shipped.height)
+                        throw SettingsError(givenTexels[a] + ": not the size of atlas '" + b.atlas.name + "'");
+                    truths.push_back({b.meshes, std::move(texels)});
+                    continue;
+                }
                 PathTracerSettings traceSettings;
                 traceSettings.samplesPerPixel = spp;
                 traceSettings.seed = seed;
@@ -227,8 +251,12 @@ int main(int argc, char** argv) {
                 const TraceResult traced = traceIrradiance(tracing.traceScene, tracing.bvh, b.atlas.receivers, traceSettings);
                 const BakedLightmap truth = finishLightmap(b.atlas, traced.direct, traced.indirect, scene, job.settings);
                 truths.push_back({b.meshes, shippedLightmapTexels(truth.total)});
+                writeExr(truths.back().texels, stem + "_texels_" + b.atlas.name + ".exr");
             }
-            writeExr(renderLightmapImage(receivers, scene, tracing.triangles, truths), truthLightmapPath);
+            writeExr(bakeLightmapImage(tracing.traceScene, tracing.bvh,
+                                       makeCameraModel(camera, job.settings.imageWidth, job.settings.imageHeight), scene,
+                                       tracing.triangles, job.settings, truths),
+                     truthLightmapPath);
         }
         if (!classesPath.empty()) {
             // Per pixel, the share of its samples whose bilinear read reaches a texel that holds the
