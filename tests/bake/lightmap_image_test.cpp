@@ -4,6 +4,8 @@
 // give the lightmap's mean over the pixel; the bake writes it beside its own image, and it
 // agrees with that image where the lightmap resolves the light.
 #include "bake/bake_job.h"
+#include "bake/bake_settings.h"
+#include "bake/settings_table.h"
 #include "bake/lightmap_image.h"
 #include "bake/receivers.h"
 
@@ -270,4 +272,18 @@ TEST_CASE("A bake writes each camera's lightmap-lit image beside its own", "[bak
     REQUIRE(without.ok);
     CHECK_FALSE(fs::exists(out / "image_lightmapped.exr"));
     CHECK(std::find(without.files.begin(), without.files.end(), "image_lightmapped.png") == without.files.end());
+}
+
+TEST_CASE("lightmap-image-subsamples takes 1 to 16 rays a side and refuses the rest by name", "[bake]") {
+    BakeSettings settings;
+    CHECK(settings.lightmapImageSubsamples == 4);
+    applySetting(bakeSettingsTable(), settings, "lightmap-image-subsamples", "16");
+    CHECK(settings.lightmapImageSubsamples == 16);
+    for (const char* bad : {"0", "17", "-1", "four"}) {
+        INFO(bad);
+        CHECK_THROWS_WITH(applySetting(bakeSettingsTable(), settings, "lightmap-image-subsamples", bad),
+                          Catch::Contains("lightmap-image-subsamples"));
+    }
+    CHECK(settings.lightmapImageSubsamples == 16);
+    CHECK_THAT(describeBakeSettings(settings), Catch::Contains("lightmap-image-subsamples=16"));
 }
