@@ -51,6 +51,16 @@ int addMaterial(Scene& scene, vec3 albedo, vec3 emission = vec3(0.0f)) {
     return int(scene.materials.size()) - 1;
 }
 
+// A camera at `position` looking straight down at the ground, +x to the image's right, 1 rad high.
+Camera cameraLookingDown(vec3 position) {
+    Camera camera;
+    camera.position = position;
+    camera.forward = vec3(0.0f, -1.0f, 0.0f);
+    camera.up = vec3(0.0f, 0.0f, -1.0f);
+    camera.yfov = 1.0f;
+    return camera;
+}
+
 // A lightmap whose every texel differs from the others, and from its mirror image in v.
 Image patternLightmap(int width, int height) {
     Image texels(width, height, 3);
@@ -105,12 +115,7 @@ TEST_CASE("A lightmap-lit pixel is albedo × the bilinear lightmap at its TEXCOO
     const SceneTriangles triangles = gatherTriangles(scene);
     const Bvh bvh = Bvh::build(triangles);
     const TraceScene trace = TraceScene::build(scene, triangles);
-    Camera camera;
-    camera.position = vec3(-0.5f, 4.0f, 0.0f);
-    camera.forward = vec3(0.0f, -1.0f, 0.0f);
-    camera.up = vec3(0.0f, 0.0f, -1.0f);
-    camera.yfov = 1.0f;
-    const CameraModel model = makeCameraModel(camera, 48, 40);
+    const CameraModel model = makeCameraModel(cameraLookingDown(vec3(-0.5f, 4.0f, 0.0f)), 48, 40);
     const CameraReceivers receivers = buildCameraReceivers(trace, bvh, model);  // the same single ray a pixel
 
     const Image texels = patternLightmap(8, 4);
@@ -165,14 +170,9 @@ TEST_CASE("A lightmap-lit pixel of n × n reads is the lightmap's mean over the 
     const SceneTriangles triangles = gatherTriangles(scene);
     const Bvh bvh = Bvh::build(triangles);
     const TraceScene trace = TraceScene::build(scene, triangles);
-    Camera camera;
     // The step a quarter of a pixel (1.28 cm on the floor) right of the image's middle column
     // edge: the pixel it crosses is three quarters bright, and its centre reads all bright.
-    camera.position = vec3(-1.0128f, 1.5f, 0.0f);
-    camera.forward = vec3(0.0f, -1.0f, 0.0f);
-    camera.up = vec3(0.0f, 0.0f, -1.0f);
-    camera.yfov = 1.0f;
-    const CameraModel model = makeCameraModel(camera, 32, 32);
+    const CameraModel model = makeCameraModel(cameraLookingDown(vec3(-1.0128f, 1.5f, 0.0f)), 32, 32);
     const CameraReceivers receivers = buildCameraReceivers(trace, bvh, model);
     Image texels(128, 4, 3);
     for (int y = 0; y < texels.height; ++y)
