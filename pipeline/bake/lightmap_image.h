@@ -11,8 +11,9 @@
 //     (tools/viewer/viewer.js lightmapAt);
 //   - for any other surface (an emitter, a mesh without TEXCOORD_1, a mesh no atlas took):
 //     kUnlitLight, what the viewer shows there (viewer.js UNLIT_LEVEL).
-// So it differs from the bake's own image only in where the light comes from: texels, not the
-// receivers' gather. The n² reads a pixel are its 1-pixel box, as the Cycles references
+// So it differs from the bake's own image in where the light comes from (texels, not the
+// receivers' gather) and in its rays: the bake's image shades its 2 × 2 a pixel merged per
+// triangle. The n² reads a pixel are its 1-pixel box, as the Cycles references
 // filter theirs and as a display of finer pixels shows the lightmap: where light changes
 // inside a pixel (a sun edge, a mullion's shadow) the pixel shows its mean, not one side of
 // it. n = 1 is one read at the pixel's centre, what the viewer's page shows at that size.

@@ -35,6 +35,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -225,11 +226,8 @@ int main(int argc, char** argv) {
         }
         if (!truthLightmapPath.empty()) {
             std::vector<std::string> givenTexels;
-            for (size_t from = 0; !truthTexelsList.empty() && from <= truthTexelsList.size();) {
-                const size_t comma = std::min(truthTexelsList.find(',', from), truthTexelsList.size());
-                givenTexels.push_back(truthTexelsList.substr(from, comma - from));
-                from = comma + 1;
-            }
+            std::istringstream list(truthTexelsList);
+            for (std::string item; std::getline(list, item, ',');) givenTexels.push_back(item);
             if (!givenTexels.empty() && givenTexels.size() != baked.size())
                 throw SettingsError("--truth-texels: " + std::to_string(givenTexels.size()) + " files for " +
                                     std::to_string(baked.size()) + " atlases");
