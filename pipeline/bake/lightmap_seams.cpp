@@ -20,6 +20,8 @@ constexpr float kSameUvTexels = 1e-3f;
 // tolerance changes its seams' jump by under 0.01 %).
 constexpr double kStitchTolerance = 1e-4;
 constexpr int kMaxStitchIterations = 2000;
+// Rounds of the bounded solve (below): each holds at zero what the last took below it.
+constexpr int kMaxStitchRounds = 8;
 // The direct and indirect images' RGB, solved side by side.
 constexpr int kStitchChannels = 6;
 
@@ -314,48 +316,72 @@ size_t stitchLightmapSeams(const std::vector<LightmapSeam>& seams, const Image& 
     std::vector<double> diagonal(lambda);
     for (size_t e = 0; e < entries.size(); ++e)
         diagonal[size_t(entries[e].first)] += double(entries[e].second) * double(entries[e].second);
-    std::vector<double> x0(variables * C), b(variables * C), d(variables * C, 0.0), r, z(variables * C), p,
-        q(variables * C);
+    std::vector<double> x0(variables * C), b(variables * C), d(variables * C, 0.0), r(variables * C),
+        z(variables * C), p(variables * C), q(variables * C);
     for (size_t v = 0; v < variables; ++v)
         for (int c = 0; c < C; ++c) x0[v * C + size_t(c)] = baked(v, c);
     apply(x0, b, false);
     for (double& value : b) value = -value;
-    r = b;
-    std::array<double, C> rr{}, rz{}, limit{};
-    for (size_t i = 0; i < variables * C; ++i) {
-        z[i] = r[i] / diagonal[i / C];
-        rr[i % C] += r[i] * r[i];
-        rz[i % C] += r[i] * z[i];
-    }
-    p = z;
-    for (int c = 0; c < C; ++c) limit[size_t(c)] = kStitchTolerance * kStitchTolerance * rr[size_t(c)];
-    for (int iteration = 0; iteration < kMaxStitchIterations; ++iteration) {
-        std::array<bool, C> active{};
-        bool any = false;
-        for (int c = 0; c < C; ++c) any = (active[size_t(c)] = rr[size_t(c)] > limit[size_t(c)]) || any;
-        if (!any) break;
-        apply(p, q, true);
-        std::array<double, C> pq{}, alpha{}, nextRr{}, nextRz{};
-        for (size_t i = 0; i < variables * C; ++i) pq[i % C] += p[i] * q[i];
-        for (int c = 0; c < C; ++c)
-            alpha[size_t(c)] = active[size_t(c)] && pq[size_t(c)] > 0.0 ? rz[size_t(c)] / pq[size_t(c)] : 0.0;
+    std::array<double, C> limit{};
+    for (size_t i = 0; i < variables * C; ++i) limit[i % C] += b[i] * b[i];
+    for (int c = 0; c < C; ++c) limit[size_t(c)] *= kStitchTolerance * kStitchTolerance;
+
+    // Light is not negative, and a texel clamped to zero after the solve no longer meets its
+    // seam: where a chart's edge crosses its last covered texel, the padding beyond takes a
+    // small share of the read and must go far below zero to bring a bright side down to a
+    // dark one (docs/seams.md). So the solve is bounded: each round solves for the free
+    // values, and those that came out below zero are held at zero in the next, where the
+    // other side's texels take the step (an active set that only grows, so the rounds end).
+    std::vector<uint8_t> held(variables * C, 0);
+    for (int round = 0; round < kMaxStitchRounds; ++round) {
+        // r = b − A d on the free values; p, q and the step live on them too.
+        apply(d, q, true);
+        std::array<double, C> rr{}, rz{};
         for (size_t i = 0; i < variables * C; ++i) {
-            const size_t c = i % C;
-            d[i] += alpha[c] * p[i];
-            r[i] -= alpha[c] * q[i];
+            r[i] = held[i] ? 0.0 : b[i] - q[i];
             z[i] = r[i] / diagonal[i / C];
-            nextRr[c] += r[i] * r[i];
-            nextRz[c] += r[i] * z[i];
+            p[i] = z[i];
+            rr[i % C] += r[i] * r[i];
+            rz[i % C] += r[i] * z[i];
         }
-        for (size_t i = 0; i < variables * C; ++i) {
-            const size_t c = i % C;
-            if (active[c]) p[i] = z[i] + (rz[c] > 0.0 ? nextRz[c] / rz[c] : 0.0) * p[i];
-        }
-        for (int c = 0; c < C; ++c)
-            if (active[size_t(c)]) {
-                rr[size_t(c)] = nextRr[size_t(c)];
-                rz[size_t(c)] = nextRz[size_t(c)];
+        for (int iteration = 0; iteration < kMaxStitchIterations; ++iteration) {
+            std::array<bool, C> active{};
+            bool any = false;
+            for (int c = 0; c < C; ++c) any = (active[size_t(c)] = rr[size_t(c)] > limit[size_t(c)]) || any;
+            if (!any) break;
+            apply(p, q, true);
+            std::array<double, C> pq{}, alpha{}, nextRr{}, nextRz{};
+            for (size_t i = 0; i < variables * C; ++i)
+                if (!held[i]) pq[i % C] += p[i] * q[i];
+            for (int c = 0; c < C; ++c)
+                alpha[size_t(c)] = active[size_t(c)] && pq[size_t(c)] > 0.0 ? rz[size_t(c)] / pq[size_t(c)] : 0.0;
+            for (size_t i = 0; i < variables * C; ++i) {
+                if (held[i]) continue;
+                const size_t c = i % C;
+                d[i] += alpha[c] * p[i];
+                r[i] -= alpha[c] * q[i];
+                z[i] = r[i] / diagonal[i / C];
+                nextRr[c] += r[i] * r[i];
+                nextRz[c] += r[i] * z[i];
             }
+            for (size_t i = 0; i < variables * C; ++i) {
+                const size_t c = i % C;
+                if (active[c] && !held[i]) p[i] = z[i] + (rz[c] > 0.0 ? nextRz[c] / rz[c] : 0.0) * p[i];
+            }
+            for (int c = 0; c < C; ++c)
+                if (active[size_t(c)]) {
+                    rr[size_t(c)] = nextRr[size_t(c)];
+                    rz[size_t(c)] = nextRz[size_t(c)];
+                }
+        }
+        size_t newlyHeld = 0;
+        for (size_t i = 0; i < variables * C; ++i)
+            if (!held[i] && x0[i] + d[i] < 0.0) {
+                held[i] = 1;
+                d[i] = -x0[i];
+                ++newlyHeld;
+            }
+        if (newlyHeld == 0) break;
     }
 
     for (size_t v = 0; v < variables; ++v) {

@@ -25,12 +25,12 @@
 // (covered ones and the padding ring beyond a chart's edge) move by a least-squares solve:
 // minimise
 //     Σ_pairs (bilinear_a(x) − bilinear_b(x))² + Σ_texels λ (x − baked)²
-// with λ = kStitchCoveredWeight for covered texels (stay near the bake) and
+// subject to x ≥ 0, with λ = kStitchCoveredWeight for covered texels (stay near the bake) and
 // kStitchPaddingWeight for padding ones (free to take what the seam needs). The pairs are read
 // on the edge only: pairs half a texel in as well pulled a crease's dark texels to the bright
-// side of a fold (the grey-white room's sofa, docs/seams.md). The
-// solve is linear in the baked values, so direct and indirect are solved and the total is
-// their sum again. Conjugate gradients with a diagonal preconditioner, serial: the same
+// side of a fold (the grey-white room's sofa, docs/seams.md). Direct and indirect are solved
+// each, and the total is their sum again. Conjugate gradients with a diagonal
+// preconditioner, in rounds that hold at zero what the last took below it; serial: the same
 // bytes at any thread count (and in a cluster's merge, which calls the same finishLightmap).
 // Production lightmappers do the same (Castaño, "Lightmap seams", The Witness).
 #pragma once

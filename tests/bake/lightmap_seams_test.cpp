@@ -186,6 +186,52 @@ TEST_CASE("Stitching makes a step across a seam one value on the edge, in direct
     CHECK(againTotal.pixels == stitchedTotal.pixels);
 }
 
+TEST_CASE("Stitching meets a step against a dark side without going below zero", "[bake]") {
+    // A floor split at x = 1 into two charts whose edges in the atlas sit three quarters into
+    // their last covered texels: A's at texel x 9.75 (texels 2..9 covered, 1 baked), B's at
+    // 14.25 (texels 14..21, 0.1 baked). On the edge each side reads ¾ of its own covered texel
+    // and ¼ of the padding beyond it. Left unbounded, the least squares meets the sides by
+    // taking A's padding to about −0.8 and B's up by as much; light cannot be negative, and
+    // clamping that afterwards pulls the sides apart again. Bounded, A's padding stops at zero
+    // and B's rises further: the two meet.
+    Scene scene;
+    scene.sourcePath = "split floor, edges inside texels (test)";
+    const int white = addLambert(scene, vec3(0.8f));
+    Mesh mesh;
+    mesh.name = "floor";
+    mesh.material = white;
+    addChart(mesh, floorRect(0, 0, 1, 1), texelRect(2.0f, 2, 9.75f, 10), kAtlas);
+    addChart(mesh, floorRect(1, 0, 2, 1), texelRect(14.25f, 2, 22, 10), kAtlas);
+    scene.meshes.push_back(mesh);
+    const std::vector<LightmapSeam> seams = findLightmapSeams(scene, {0}, kAtlas, kAtlas);
+    REQUIRE(seams.size() == 1);
+
+    Image mask(kAtlas, kAtlas, 1), direct(kAtlas, kAtlas, 3);
+    for (int y = 2; y < 10; ++y)
+        for (int x = 2; x < 22; ++x) {
+            if (x >= 10 && x < 14) continue;
+            mask.at(x, y) = 1.0f;
+            direct.setRgb(x, y, vec3(x < 10 ? 1.0f : 0.1f));
+        }
+    dilatePadding(direct, mask);
+    Image indirect(kAtlas, kAtlas, 3), total = direct;
+    const double before = measureSeamJump(seams, total, 0.0f).meanRelative;
+    const size_t moved = stitchLightmapSeams(seams, mask, direct, indirect, total);
+    const double after = measureSeamJump(seams, total, 0.0f).meanRelative;
+    WARN("step 1 | 0.1, edges inside texels: jump on the edge " << before << " before stitching, " << after
+                                                                 << " after, " << moved << " texels moved");
+    // |1 − 0.1| / 0.55 before.
+    CHECK(before == Approx(0.9 / 0.55).epsilon(0.01));
+    CHECK(after < 0.02);
+    for (const Image* image : {&direct, &indirect, &total})
+        for (float v : image->pixels) REQUIRE(v >= 0.0f);
+    // A's padding is held at zero, and its covered edge texel stays on its own side of the
+    // step's midpoint (0.55): B's padding, 25 times freer, takes the most of the step.
+    CHECK(direct.at(10, 5) == 0.0f);
+    CHECK(direct.at(9, 5) > 0.55f);
+    CHECK(direct.at(13, 5) > 1.0f);
+}
+
 TEST_CASE("Stitching a lightmap smooth across its seams moves it by less than a texel's step", "[bake]") {
     const Scene scene = twoSplitSurfaces();
     const std::vector<LightmapSeam> seams = findLightmapSeams(scene, {0}, kAtlas, kAtlas);

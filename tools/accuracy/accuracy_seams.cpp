@@ -22,10 +22,12 @@
 #include "trace/path_tracer.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -37,7 +39,7 @@ namespace {
 // A class of seams: its share of the seams' counted weight and the two jumps' sums.
 struct Class {
     const char* name;
-    SeamJump before, after;
+    SeamJump before, after, edgeBefore, edgeAfter;
 };
 
 void add(SeamJump& sum, const SeamJump& one) {
@@ -115,12 +117,18 @@ int main(int argc, char** argv) {
                                       stages.onGpu);
         // Folds: < 1°, 1-15°, 15-45°, ≥ 45°; lengths: the longer side < 2, 2-16, ≥ 16 texels;
         // levels: the mean of the two sides unstitched, per channel, < 0.01, 0.01-0.1, ≥ 0.1.
-        std::vector<Class> classes = {{"all seams", {}, {}},         {"fold < 1 deg", {}, {}},
-                                      {"fold 1-15 deg", {}, {}},     {"fold 15-45 deg", {}, {}},
-                                      {"fold >= 45 deg", {}, {}},    {"length < 2 texels", {}, {}},
-                                      {"length 2-16 texels", {}, {}}, {"length >= 16 texels", {}, {}},
-                                      {"level < 0.01", {}, {}},      {"level 0.01-0.1", {}, {}},
-                                      {"level >= 0.1", {}, {}}};
+        // Texels: whether the two sides' on-edge reads touch a texel in common (a covered texel
+        // cut by both charts' edges, or a padding ring two charts share), and whether a texel
+        // the seam's reads touch is read by three or more seam sides (corners, thin charts).
+        std::vector<Class> classes = {{"all seams", {}, {}, {}, {}},         {"fold < 1 deg", {}, {}, {}, {}},
+                                      {"fold 1-15 deg", {}, {}, {}, {}},     {"fold 15-45 deg", {}, {}, {}, {}},
+                                      {"fold >= 45 deg", {}, {}, {}, {}},    {"length < 2 texels", {}, {}, {}, {}},
+                                      {"length 2-16 texels", {}, {}, {}, {}}, {"length >= 16 texels", {}, {}, {}, {}},
+                                      {"level < 0.01", {}, {}, {}, {}},      {"level 0.01-0.1", {}, {}, {}, {}},
+                                      {"level >= 0.1", {}, {}, {}, {}},      {"sides share a texel", {}, {}, {}, {}},
+                                      {"sides share none", {}, {}, {}, {}},  {"a texel of 3+ sides", {}, {}, {}, {}},
+                                      {"texels of <= 2 sides", {}, {}, {}, {}}};
+        SeamJump floatAfterAtEdge;
         double stitchSeconds = 0.0, finishSeconds = 0.0;
         // Every 16th pair read: the bake's two reads, and the two points they stand for.
         SurfaceSampleSet truthPoints;
@@ -148,8 +156,44 @@ int main(int argc, char** argv) {
                         atlas.name.c_str(), atlas.mask.width, atlas.mask.height, seams.size(), on.seams.after.length,
                         100.0 * on.seams.before.meanRelative, 100.0 * on.seams.after.meanRelative,
                         on.seams.texelsMoved);
-            for (const LightmapSeam& seam : seams) {
+            floatAfterAtEdge = measureSeamJump(seams, on.total, 0.0f);
+            // The texels each seam side's on-edge reads touch (bilinear, as the stitch sees them).
+            const auto sideTexels = [&](const LightmapSeam& seam, int side) {
+                std::vector<size_t> texels;
+                const float length = std::max(glm::length(seam.sides[0].b - seam.sides[0].a),
+                                              glm::length(seam.sides[1].b - seam.sides[1].a));
+                const int n = std::clamp(int(std::ceil(2.0f * length)), 2, 4096);
+                for (int k = 0; k < n; ++k) {
+                    const float t = (float(k) + 0.5f) / float(n);
+                    const vec2 p = seam.sides[side].a + t * (seam.sides[side].b - seam.sides[side].a) - vec2(0.5f);
+                    const int x0 = int(std::floor(p.x)), y0 = int(std::floor(p.y));
+                    for (int dy = 0; dy <= 1; ++dy)
+                        for (int dx = 0; dx <= 1; ++dx) {
+                            const int x = std::clamp(x0 + dx, 0, before.width - 1), y = std::clamp(y0 + dy, 0, before.height - 1);
+                            texels.push_back(size_t(y) * size_t(before.width) + size_t(x));
+                        }
+                }
+                std::sort(texels.begin(), texels.end());
+                texels.erase(std::unique(texels.begin(), texels.end()), texels.end());
+                return texels;
+            };
+            std::vector<uint8_t> sidesAt(size_t(before.width) * size_t(before.height), 0);
+            std::vector<std::array<std::vector<size_t>, 2>> touched(seams.size());
+            for (size_t s = 0; s < seams.size(); ++s)
+                for (int side = 0; side < 2; ++side) {
+                    touched[s][size_t(side)] = sideTexels(seams[s], side);
+                    for (size_t texel : touched[s][size_t(side)]) sidesAt[texel] = uint8_t(std::min(255, sidesAt[texel] + 1));
+                }
+            for (size_t s = 0; s < seams.size(); ++s) {
+                const LightmapSeam& seam = seams[s];
                 const SeamJump b = measureSeamJump({seam}, before), a = measureSeamJump({seam}, after);
+                const SeamJump eb = measureSeamJump({seam}, before, 0.0f), ea = measureSeamJump({seam}, after, 0.0f);
+                std::vector<size_t> common;
+                std::set_intersection(touched[s][0].begin(), touched[s][0].end(), touched[s][1].begin(),
+                                      touched[s][1].end(), std::back_inserter(common));
+                bool crowded = false;
+                for (int side = 0; side < 2; ++side)
+                    for (size_t texel : touched[s][size_t(side)]) crowded = crowded || sidesAt[texel] >= 3;
                 const float texels = std::max(glm::length(seam.sides[0].b - seam.sides[0].a),
                                               glm::length(seam.sides[1].b - seam.sides[1].a));
                 const double level = b.weight > 0.0 ? b.levelSum / b.weight / 3.0 : 0.0;
@@ -178,9 +222,12 @@ int main(int argc, char** argv) {
                 }
                 for (size_t c : {size_t(0), size_t(fold < 1.0f ? 1 : fold < 15.0f ? 2 : fold < 45.0f ? 3 : 4),
                                  size_t(texels < 2.0f ? 5 : texels < 16.0f ? 6 : 7),
-                                 size_t(level < 0.01 ? 8 : level < 0.1 ? 9 : 10)}) {
+                                 size_t(level < 0.01 ? 8 : level < 0.1 ? 9 : 10), size_t(common.empty() ? 12 : 11),
+                                 size_t(crowded ? 13 : 14)}) {
                     add(classes[c].before, b);
                     add(classes[c].after, a);
+                    add(classes[c].edgeBefore, eb);
+                    add(classes[c].edgeAfter, ea);
                 }
             }
         }
@@ -207,12 +254,14 @@ int main(int argc, char** argv) {
         }
         std::printf("%s: finishing the lightmaps took %.2f s unstitched; stitching added %.2f s\n",
                     job.scenePath.c_str(), finishSeconds, stitchSeconds);
-        std::printf("%-22s %7s %9s %14s %14s\n", "seams", "count", "share", "jump before", "jump after");
+        std::printf("on the edge, stitched, before 8-bit RGBM: %.2f%%\n", 100.0 * floatAfterAtEdge.meanRelative);
+        std::printf("%-22s %7s %9s %14s %14s %14s %14s\n", "seams", "count", "share", "jump before", "jump after",
+                    "edge before", "edge after");
         const double total = classes[0].before.weight;
         for (const Class& c : classes)
-            std::printf("%-22s %7zu %8.1f%% %13.2f%% %13.2f%%\n", c.name, c.before.edges,
+            std::printf("%-22s %7zu %8.1f%% %13.2f%% %13.2f%% %13.2f%% %13.2f%%\n", c.name, c.before.edges,
                         total > 0.0 ? 100.0 * c.before.weight / total : 0.0, 100.0 * mean(c.before),
-                        100.0 * mean(c.after));
+                        100.0 * mean(c.after), 100.0 * mean(c.edgeBefore), 100.0 * mean(c.edgeAfter));
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return 1;
