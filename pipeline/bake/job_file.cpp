@@ -362,7 +362,8 @@ void readSky(const json& object, BakeSettings& settings, const std::string& wher
 std::string sceneOutputName(const std::string& scenePath) { return fs::path(scenePath).stem().string(); }
 
 std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& defaults,
-                                 const std::string& defaultOutputRoot, const SettingAssignments& command) {
+                                 const std::string& defaultOutputRoot, const SettingAssignments& command,
+                                 const std::string& commandOutputRoot) {
     const json root = readJson(path, "job file");
     if (root.is_object()) checkKeys(root, kJobKeys, path, {inScene(), inSettings()}, " at the top level");
     if (!root.is_object() || !root.contains("scenes") || !root["scenes"].is_array() || root["scenes"].empty())
@@ -381,7 +382,9 @@ std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& de
         if (root.contains("sky")) readSky(root["sky"], global, path + ": sky", base);
         if (root.contains("output") && !root["output"].is_string())
             throw InputError(path + ": \"output\" must be a string, the folder the scenes bake into");
-        const std::string outputRoot = root.contains("output") ? resolve(root["output"].get<std::string>()) : defaultOutputRoot;
+        const std::string outputRoot = !commandOutputRoot.empty() ? commandOutputRoot
+                                       : root.contains("output") ? resolve(root["output"].get<std::string>())
+                                                                 : defaultOutputRoot;
         const fs::path resolvedRoot = resolvedFolder(outputRoot, path + ": output");
 
         std::vector<BakeJob> jobs;

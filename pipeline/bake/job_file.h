@@ -38,12 +38,15 @@ namespace vl {
 
 // Each scene starts from `defaults`; the file's global and per-scene settings apply on top,
 // then `command`, the settings the command line gave (name, value): what the user typed last
-// wins over the file (a job baked at another lightmap-res without editing it). InputError /
+// wins over the file (a job baked at another lightmap-res without editing it). The scenes bake
+// under the file's "output" (relative to the file), else `defaultOutputRoot`; a non-empty
+// `commandOutputRoot` (the command's -o) wins over both, as the command's settings do. InputError /
 // SettingsError name the file and the scene. It reads only: a refused job file leaves nothing
 // written.
 using SettingAssignments = std::vector<std::pair<std::string, std::string>>;
 std::vector<BakeJob> readJobFile(const std::string& path, const BakeSettings& defaults,
-                                 const std::string& defaultOutputRoot, const SettingAssignments& command = {});
+                                 const std::string& defaultOutputRoot, const SettingAssignments& command = {},
+                                 const std::string& commandOutputRoot = "");
 
 // Atlas groups (LightmapSettings::atlases) from a JSON file holding a job file's "atlases"
 // array, or from a job file's top-level "atlases", for commands that take no job file.

@@ -816,6 +816,14 @@ TEST_CASE("Job files refuse every key they do not know, naming the file, the pla
     CHECK(jobs[0].addedLights.size() == 3);
     CHECK(jobs[0].addedCameras.size() == 1);
     CHECK(jobs[1].outputDir == (dir / "out" / "levels" / "b").string());
+
+    // The command's -o wins over the file's "output", as its settings win over the file's;
+    // the scenes keep their folders inside it.
+    const std::string elsewhere = (dir / "elsewhere").string();
+    const std::vector<BakeJob> moved = readJobFile(file, BakeSettings{}, "output", {}, elsewhere);
+    REQUIRE(moved.size() == 2);
+    CHECK(moved[0].outputDir == (dir / "elsewhere" / "first").string());
+    CHECK(moved[1].outputDir == (dir / "elsewhere" / "levels" / "b").string());
 }
 
 TEST_CASE("A job file's scene name is one folder's name, and each scene's bake stays inside the output folder", "[bake]") {

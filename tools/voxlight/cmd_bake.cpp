@@ -94,7 +94,7 @@ std::vector<BakeJob> planJobs(const cluster::PlannedCommand& command, bool quiet
     std::vector<BakeJob> jobs;
     for (const std::string& input : inputs) {
         if (isJobFile(input)) {
-            for (BakeJob& job : readJobFile(input, settings, command.output.empty() ? "output" : command.output, command.settings)) {
+            for (BakeJob& job : readJobFile(input, settings, "output", command.settings, command.output)) {
                 job.settings.strict = job.settings.strict || command.strict;
                 job.settings.quiet = quiet;
                 jobs.push_back(std::move(job));
