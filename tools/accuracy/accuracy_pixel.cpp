@@ -7,7 +7,8 @@
 // at the texel's own samples on the side the lightmap holds. So a pixel's error splits into the
 // light the texel holds (texel against its truth) and how the lightmap represents the surface
 // (its truth against the pixel's). --texel X,Y does the same for a texel of the (first) atlas:
-// its samples, each with its truth. --classes OUT.exr writes, per pixel, the share of its samples
+// its samples, each with its truth, and whether each is buried (shade_element.h isBuried) and by
+// what surface. --classes OUT.exr writes, per pixel, the share of its samples
 // whose bilinear read reaches a texel that holds the other side of the surface (R), another face
 // of it (normals over 45° apart, G), or padding or another mesh (B), and OUT_materials.exr the
 // material of each pixel's main sample: an error heat map split by cause (docs/accuracy.md).
@@ -27,6 +28,7 @@
 #include "bake/bake_job.h"
 #include "bake/job_file.h"
 #include "bake/lightmap_image.h"
+#include "bake/shade_element.h"
 #include "bake/lightmap_sides.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -223,6 +225,35 @@ int main(int argc, char** argv) {
                 std::printf("  sample at (%.3f, %.3f, %.3f) n (%.2f, %.2f, %.2f) weight %.3f on %s: truth %.4f (direct %.4f)\n", own[k].position.x,
                             own[k].position.y, own[k].position.z, own[k].normal.x, own[k].normal.y, own[k].normal.z, own[k].weight,
                             meshOf(scene, tracing.triangles, own[k].triangle).c_str(), grey(truths[k]), grey(directs[k]));
+            // Whether each sample is buried (shade_element.h isBuried), and by what: the probes
+            // that meet a surface from behind, and the nearest such surface.
+            for (size_t k = 0; k < own.size(); ++k) {
+                const SurfaceSample& r = own[k];
+                vec3 tangent, bitangent;
+                orthonormalBasis(r.normal, tangent, bitangent);
+                Ray ray;
+                ray.origin = offsetRayOrigin(r.position, r.normal, tracing.bvh.view().extent);
+                int behind = 0;
+                Hit nearest;
+                nearest.t = INFINITY;
+                for (int a = 0; a < kBuriedProbesPerAxis; ++a)
+                    for (int c = 0; c < kBuriedProbesPerAxis; ++c) {
+                        const vec3 d = sampleCosineHemisphere(
+                            vec2((float(a) + 0.5f) / kBuriedProbesPerAxis, (float(c) + 0.5f) / kBuriedProbesPerAxis));
+                        ray.direction = d.x * tangent + d.y * bitangent + d.z * r.normal;
+                        Hit hit;
+                        if (!intersectClosest(tracing.bvh.view(), ray, hit)) continue;
+                        const vec3* n = tracing.traceScene.view().normals + 3 * size_t(hit.triangle);
+                        const vec3 normal = (1.0f - hit.b1 - hit.b2) * n[0] + hit.b1 * n[1] + hit.b2 * n[2];
+                        if (!(glm::dot(normal, ray.direction) > 0.0f)) continue;
+                        ++behind;
+                        if (hit.t < nearest.t) nearest = hit;
+                    }
+                std::printf("  sample %zu: %d of %d probes meet a surface from behind%s%s%s: %s\n", k, behind, kBuriedProbeRays,
+                            behind ? " (the nearest " : "", behind ? meshOf(scene, tracing.triangles, nearest.triangle).c_str() : "",
+                            behind ? (" at " + std::to_string(nearest.t) + ")").c_str() : "",
+                            isBuried(tracing.traceScene.view(), tracing.bvh.view(), r) ? "buried" : "open");
+            }
         }
         if (!truthLightmapPath.empty()) {
             std::vector<std::string> givenTexels;
