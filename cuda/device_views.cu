@@ -21,6 +21,8 @@ TraceSceneView uploadTraceScene(DeviceBuffers& owner, const TraceSceneView& host
     d.emitterCdf = upload(owner, host.emitterCdf, host.emitterCount);
     d.emitterSelectPdf = upload(owner, host.emitterSelectPdf, host.emitterSelectPdf ? host.triangleCount : 0);
     d.emitterQuad = upload(owner, host.emitterQuad, host.emitterCount);
+    d.pointLightTree.nodes = upload(owner, host.pointLightTree.nodes, host.pointLightTree.nodeCount);
+    d.emitterTree.nodes = upload(owner, host.emitterTree.nodes, host.emitterTree.nodeCount);
     const size_t skyTexels = host.sky.hasImage() ? size_t(host.sky.width) * size_t(host.sky.height) : 0;
     d.sky.texels = upload(owner, host.sky.texels, skyTexels);
     d.sky.rowCdf = upload(owner, host.sky.rowCdf, host.sky.rowCdf ? size_t(host.sky.height) : 0);

@@ -302,6 +302,81 @@ SceneDescription classroom() {
     return scene;
 }
 
+// A hall of many lights (issue 35's many-emitter scene): 12 × 8 × 24 m, its two long walls
+// each holding ten windows of 10 × 10 emissive panes (2,000 quads a centimetre off the wall,
+// facing in, the wall showing between them as mullions), and 200 point lights hung in a
+// 10 × 20 grid at 3.2 m. Two rows of pillars and a row of tables cast the shadows that make
+// the lights' visibility matter. Every receiver sees hundreds of lights, most of them far.
+SceneDescription manyLightsHall() {
+    SceneDescription scene;
+    enum { kWall, kCeiling, kFloor, kStone, kWood, kPane };
+    scene.materials = {material("Wall", vec3(0.70f, 0.68f, 0.62f)),
+                       material("Ceiling", vec3(0.75f)),
+                       material("Floor", vec3(0.45f, 0.42f, 0.38f)),
+                       material("Stone", vec3(0.55f, 0.55f, 0.58f)),
+                       material("TableWood", vec3(0.50f, 0.34f, 0.20f)),
+                       material("Pane", vec3(0.0f), vec3(0.85f, 0.92f, 1.0f), 3.0f)};
+    const float X = 12.0f, Y = 8.0f, Z = -24.0f;
+    const vec3 inside(0.5f * X, 0.5f * Y, 0.5f * Z);
+    auto face = [&](std::vector<Quad>& quads, vec3 a, vec3 b, vec3 c, vec3 d) { quads.push_back(oriented({a, b, c, d}, inside, true)); };
+    auto mesh = [&](const std::string& name, int material, std::vector<Quad> quads) {
+        scene.meshes.push_back({name, material, std::move(quads), false});
+    };
+    std::vector<Quad> floor, ceiling, walls;
+    face(floor, {0, 0, 0}, {X, 0, 0}, {X, 0, Z}, {0, 0, Z});
+    face(ceiling, {0, Y, 0}, {X, Y, 0}, {X, Y, Z}, {0, Y, Z});
+    face(walls, {0, 0, 0}, {X, 0, 0}, {X, Y, 0}, {0, Y, 0});
+    face(walls, {0, 0, Z}, {X, 0, Z}, {X, Y, Z}, {0, Y, Z});
+    face(walls, {0, 0, 0}, {0, 0, Z}, {0, Y, Z}, {0, Y, 0});
+    face(walls, {X, 0, 0}, {X, 0, Z}, {X, Y, Z}, {X, Y, 0});
+    mesh("Floor", kFloor, floor);
+    mesh("Ceiling", kCeiling, ceiling);
+    mesh("Walls", kWall, walls);
+
+    // Panes 0.16 m along the wall by 0.30 m, 2 cm apart, from 2.5 m up.
+    std::vector<Quad> panes;
+    const float paneWidth = 0.16f, paneHeight = 0.30f, gap = 0.02f, bottom = 2.5f;
+    for (const float wallX : {0.01f, X - 0.01f})
+        for (int window = 0; window < 10; ++window) {
+            const float centre = -1.2f - 2.4f * float(window);
+            const float start = centre - 0.5f * (10.0f * paneWidth + 9.0f * gap);
+            for (int row = 0; row < 10; ++row)
+                for (int column = 0; column < 10; ++column) {
+                    const float z0 = start + float(column) * (paneWidth + gap), z1 = z0 + paneWidth;
+                    const float y0 = bottom + float(row) * (paneHeight + gap), y1 = y0 + paneHeight;
+                    face(panes, {wallX, y0, z0}, {wallX, y0, z1}, {wallX, y1, z1}, {wallX, y1, z0});
+                }
+        }
+    mesh("WindowPanes", kPane, panes);
+
+    std::vector<Quad> pillars, tables;
+    auto add = [](std::vector<Quad>& to, const std::vector<Quad>& quads) { to.insert(to.end(), quads.begin(), quads.end()); };
+    for (int k = 1; k <= 9; ++k) {
+        const float z = -2.4f * float(k);
+        add(pillars, boxQuads({3.3f, 0.0f, z - 0.3f}, {3.9f, Y, z + 0.3f}));
+        add(pillars, boxQuads({8.1f, 0.0f, z - 0.3f}, {8.7f, Y, z + 0.3f}));
+    }
+    for (int k = 0; k < 10; ++k) {
+        const float z = -1.2f - 2.4f * float(k);
+        add(tables, boxQuads({5.2f, 0.0f, z - 0.4f}, {6.8f, 0.75f, z + 0.4f}));
+    }
+    mesh("Pillars", kStone, pillars);
+    mesh("Tables", kWood, tables);
+
+    // 20 W each (I = 20/(4π) W/sr), warm.
+    for (int i = 0; i < 10; ++i)
+        for (int j = 0; j < 20; ++j)
+            scene.lights.push_back({"Lamp" + std::to_string(i) + "_" + std::to_string(j),
+                                    vec3(0.6f + 1.2f * float(i), 3.2f, -0.6f - 1.2f * float(j)), vec3(1.0f, 0.8f, 0.6f),
+                                    20.0f / (4.0f * kPi) * 683.0f});
+
+    // At the hall's end, looking down its length.
+    scene.camera.position = vec3(6.0f, 1.7f, -0.5f);
+    scene.camera.yfov = 1.0f;
+    scene.camera.aspectRatio = 1.5f;
+    return scene;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -314,11 +389,12 @@ int main(int argc, char** argv) {
         writePngSrgb(plankTexture(), directory + "/classroom_floor.png");
         writePngSrgb(boardTexture(), directory + "/classroom_board.png");
         writeGltf(classroom(), directory, "classroom");
+        writeGltf(manyLightsHall(), directory, "many_lights_hall");
     } catch (const std::exception& e) {
         std::fprintf(stderr, "make_scenes: %s\n", e.what());
         return 1;
     }
-    std::printf("wrote cornell_box.gltf, cornell_box_point.gltf, two_rooms.gltf and classroom.gltf into %s\n",
+    std::printf("wrote cornell_box.gltf, cornell_box_point.gltf, two_rooms.gltf, classroom.gltf and many_lights_hall.gltf into %s\n",
                 directory.c_str());
     return 0;
 }

@@ -151,8 +151,8 @@ std::string generatedAtlasName(const LightmapSettings& settings) {
     return name;
 }
 
-ReceiverScene::ReceiverScene(const Scene& scene)
-    : triangles(gatherTriangles(scene)), bvh(Bvh::build(triangles)), traceScene(TraceScene::build(scene, triangles)),
+ReceiverScene::ReceiverScene(const Scene& scene, bool lightTrees)
+    : triangles(gatherTriangles(scene)), bvh(Bvh::build(triangles)), traceScene(TraceScene::build(scene, triangles, lightTrees)),
       viewpoints(cameraViewpoints(scene)) {}
 
 GeneratedUvs generateSharedAtlasUvs(Scene& scene, const BakeSettings& settings, double voxelSize, Diagnostics& diagnostics) {
@@ -263,7 +263,7 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
         Progress progress("voxelize", scene.triangleCount(), settings.quiet);
         return voxelize(scene, voxelSettings, &progress);
     });
-    stages.tracing = timed(result.stages, "bvh", [&] { return std::make_unique<ReceiverScene>(scene); });
+    stages.tracing = timed(result.stages, "bvh", [&] { return std::make_unique<ReceiverScene>(scene, settings.lightTrees); });
     const TraceSceneView sceneView = stages.tracing->traceScene.view();
     const BvhView bvhView = stages.tracing->bvh.view();
     // Points on the voxels' surfaces: what the voxel pass by rays lights and the final gather's

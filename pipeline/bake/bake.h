@@ -85,7 +85,8 @@ struct ReceiverScene {
     Bvh bvh;
     TraceScene traceScene;
     std::vector<Viewpoint> viewpoints;  // the scene's own cameras: where people stand (bake/open_space.h)
-    explicit ReceiverScene(const Scene& scene);
+    // lightTrees: BakeSettings::lightTrees (trace_scene.h).
+    explicit ReceiverScene(const Scene& scene, bool lightTrees = true);
 };
 
 // Lightmap UVs for the shared atlas's meshes that have no TEXCOORD_1 (when the settings

@@ -158,12 +158,19 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
              if (v != "voxels" && v != "exact") throw SettingsError("setting hit-light = '" + v + "' is not one of voxels, exact");
              s.hitLightExact = v == "exact";
          }},
+        {"many-lights", "how a scene of more than 64 point lights or emissive triangles is lit: tree (each receiver and voxel takes a cut of a tree of the lights: the near and bright ones exact, the far ones sampled by importance, unbiased) or each (every receiver visits every light) (default tree)",
+         [](S& s, const std::string& v) {
+             if (v != "tree" && v != "each") throw SettingsError("setting many-lights = '" + v + "' is not one of tree, each");
+             s.lightTrees = v == "tree";
+         }},
         {"near-field", "a lightmap record's ray that hits a surface nearer than this many voxels traces the light there on, by a path of cosine rays, instead of reading the voxel, which a crease narrower than a voxel shares with the open surface beside it; 0: every hit reads its voxel (default 1)",
          [](S& s, const std::string& v) { s.nearFieldVoxels = static_cast<float>(parseRealSetting("near-field", v, 0, 64)); }},
         {"lightmap-stitch", "stitch lightmap chart seams: where one surface is split between two charts, move the texels on both sides by a small least-squares solve so they read one value on the split itself (default true)",
          [](S& s, const std::string& v) { s.lightmapStitch = parseBoolSetting("lightmap-stitch", v); }},
         {"lightmap-subsamples", "n × n sub-texel probes per texel (default 4)",
          [](S& s, const std::string& v) { s.lightmap.subsamplesPerAxis = parseIntSetting("lightmap-subsamples", v, 1, 8); }},
+        {"light-cut", "past 64 point lights or emissive triangles: how many nodes of each tree of lights a receiver sample takes, the near and bright ones alone and exact, the rest one light drawn by importance (default 64)",
+         [](S& s, const std::string& v) { s.direct.lightCut = parseIntSetting("light-cut", v, 1, kMaxLightCut); }},
         {"emitter-strata", "n × n shadow points per emissive triangle for the exact direct term, ⌈n√2⌉² per parallelogram quad (default 4)",
          [](S& s, const std::string& v) { s.direct.emitterStrata = parseIntSetting("emitter-strata", v, 1, 64); }},
         {"sky", "a uniform sky's radiance R,G,B in W/(m²·sr), seen wherever the scene does not block it (default 0: none)",
@@ -272,6 +279,9 @@ void validateBakeSettings(const BakeSettings& s) {
         throw SettingsError("setting emitter-strata = " + std::to_string(s.direct.emitterStrata) + " is outside 1..64");
     if (s.direct.skyStrata < 1 || s.direct.skyStrata > 64)
         throw SettingsError("setting sky-strata = " + std::to_string(s.direct.skyStrata) + " is outside 1..64");
+    if (s.direct.lightCut < 1 || s.direct.lightCut > kMaxLightCut)
+        throw SettingsError("setting light-cut = " + std::to_string(s.direct.lightCut) + " is outside 1.." +
+                            std::to_string(kMaxLightCut));
     if (s.lighting.visibilityBy == VoxelVisibility::Rays &&
         (s.lighting.attenuation || !s.lighting.lightAttenuation.empty()))
         throw SettingsError("setting attenuation: the paper's eq. 18 falloff is the stepping pass's; the receivers and "
@@ -310,6 +320,8 @@ std::string describeBakeSettings(const BakeSettings& s) {
     if (s.lightmapSide != LightmapSide::Inside) out << ", lightmap-side=" << toString(s.lightmapSide);
     if (!s.lightmapStitch) out << ", lightmap-stitch=false";
     if (!s.hitLightExact) out << ", hit-light=voxels";
+    if (!s.lightTrees) out << ", many-lights=each";
+    if (s.direct.lightCut != DirectLightSettings{}.lightCut) out << ", light-cut=" << s.direct.lightCut;
     if (s.nearFieldVoxels != BakeSettings{}.nearFieldVoxels) out << ", near-field=" << s.nearFieldVoxels;
     if (s.lightmapImageSubsamples != BakeSettings{}.lightmapImageSubsamples)
         out << ", lightmap-image-subsamples=" << s.lightmapImageSubsamples;

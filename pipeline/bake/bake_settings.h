@@ -125,6 +125,10 @@ struct BakeSettings {
     // surfaces a few centimetres apart); with punctual lights the bright patches are then off.
     // docs/accuracy.md.
     bool hitLightExact = true;
+    // many-lights tree: past 64 point lights or emissive triangles, receivers and voxels take a
+    // cut of a tree of them (trace/light_tree.h); each: every receiver visits every light, the
+    // exact sums. docs/many-lights.md.
+    bool lightTrees = true;
     // near-field: a lightmap record's ray that hits a surface nearer than this many voxels
     // traces its light on instead of reading the voxel there (bake/ray_gather.h FanExtras);
     // 0: every hit reads its voxel. docs/accuracy.md.

@@ -187,7 +187,8 @@ vec3 lightsReflectedAt(const TraceSceneView& scene, const BvhView& bvh, const Ra
     const vec3 side = glm::dot(h.geometricNormal, ray.direction) < 0.0f ? h.geometricNormal : -h.geometricNormal;
     vec2 u;
     draws.next2D(u.x, u.y);
-    return baseColorAt(scene, h) * kInvPi * punctualIrradiance(scene, bvh, h.position, side, side, u);
+    const uint64_t seed = scene.pointLightTree.nodes ? draws.nextU32() : 0;
+    return baseColorAt(scene, h) * kInvPi * punctualLightsIrradiance(scene, bvh, h.position, side, side, u, kHitLightCut, seed);
 }
 
 }  // namespace

@@ -247,7 +247,7 @@ UnitRecord runReceiverUnit(const BakeJob& job, const std::string& sceneWork, con
         const VoxelState state = finishedVoxelState(sceneWork);
         const auto start = std::chrono::steady_clock::now();
         const Scene scene = receiverScene(loadJobScene(job), state);
-        const ReceiverScene tracing(scene);
+        const ReceiverScene tracing(scene, settings.lightTrees);
         const RebuiltGather gather = rebuildGather(state, tracing, settings);
         const ReceiverShading shading(tracing, gather.mips, gather.cache, gather.bright, settings, state.onGpu);
         UnitFile file;
@@ -376,7 +376,7 @@ BakeReport mergeScene(const BakeJob& job, const std::string& sceneWork, const Sc
         // The lightmap-lit images need every atlas finished, so they are made here.
         if (makesLightmapImages(job.settings) && units.cameras > 0) {
             const auto start = std::chrono::steady_clock::now();
-            addLightmapImages(scene, ReceiverScene(scene), job.settings, result);
+            addLightmapImages(scene, ReceiverScene(scene, job.settings.lightTrees), job.settings, result);
             report.stages.push_back({"lightmap image", secondsSince(start)});
         }
         for (const UnitRecord& record : records)

@@ -39,6 +39,10 @@ struct DirectLightSettings {
     // false: the sky is left out here, for receivers that gather it with their indirect light
     // (a lightmap's records, bake/texel_gather.h).
     bool skyAtSamples = true;
+    // How many nodes a receiver sample's cut of a tree of many lights takes, per tree
+    // (trace/light_tree.h): the nearer and brighter lights alone and exact, the rest sampled.
+    // docs/many-lights.md.
+    int lightCut = 64;
 };
 
 // cos θ_r · cos θ_e / d² between a receiver (p; geometric normal ng, shading normal ns) and
@@ -305,46 +309,67 @@ VL_HOSTDEV inline vec3 sunIrradiance(const BvhView& bvh, const TraceLight& light
     return sum / float(strata * strata);
 }
 
-// Past this many emissive triangles (a modelled bulb, a panel of LEDs) a receiver samples them
-// by power instead of visiting each one: a visit costs a sample at least seven shadow rays per
-// triangle, and Khronos' LightsPunctualLamp (5,986 emissive triangles in its bulbs) took 930 s
-// for a 256² lightmap and image on 2 cores.
-constexpr uint32_t kMaxVisitedEmitters = 64;
-
-// Σ over many emissive triangles by (2n)² points drawn by power (TraceScene's emitter CDF),
-// stratified over the CDF and within each triangle (the pick's leftover fraction places the
-// point): E ≈ (1/M) Σ Le · cos θ_r · cos θ_e / d² · V · A_k / P(k). Unbiased; its noise falls
-// with the receivers' own averaging over texels and pixels.
-VL_HOSTDEV inline vec3 sampledEmittersIrradiance(const TraceSceneView& s, const BvhView& bvh, const vec3& p,
-                                                 const vec3& ng, const vec3& ns, int strata, uint64_t seed) {
-    const int n = 2 * strata;
-    vec3 sum(0.0f);
-    for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j) {
-            const vec2 u = jitteredStratum(seed, uint64_t(1) << 32, n, i, j, 0x4D414E59u);  // "MANY"
-            const uint32_t picked = pickEmitter(s, u.x);
-            const float low = picked > 0 ? s.emitterCdf[picked - 1] : 0.0f;
-            const float width = s.emitterCdf[picked] - low;
-            if (!(width > 0.0f)) continue;
-            const float reused = glm::clamp((u.x - low) / width, 0.0f, 0.99999994f);
-            const uint32_t triangle = s.emitters[picked];
-            const vec3* v = s.vertices + 3 * static_cast<size_t>(triangle);
-            const vec3 cross = glm::cross(v[1] - v[0], v[2] - v[0]);
-            const float twiceArea = glm::length(cross);
-            const float selectPdf = s.emitterSelectPdf[triangle];
-            if (!(twiceArea > 0.0f) || !(selectPdf > 0.0f)) continue;
-            const vec3 emitterNormal = cross / twiceArea;
-            const float facing = glm::dot(p - v[0], emitterNormal);
-            if (facing == 0.0f || (facing < 0.0f && !s.materials[s.materialIds[triangle]].doubleSided)) continue;
-            const vec3 towardReceiver = facing > 0.0f ? emitterNormal : -emitterNormal;
-            const vec2 b = sampleUniformTriangle(vec2(reused, u.y));
-            const SurfaceHit point = surfaceAt(s, triangle, b.x, b.y);
-            vec3 wi;
-            const float g = geometricFactor(p, ng, ns, point.position, towardReceiver, wi);
-            if (!(g > 0.0f) || occluded(bvh, p, ng, point.position, towardReceiver)) continue;
-            sum += emissionAt(s, point, -wi) * (g * 0.5f * twiceArea / selectPdf);
+// One emitter patch's irradiance at a receiver by one point drawn uniformly over its area at u
+// ∈ [0, 1)² and its shadow ray: Le · cos θ_r · cos θ_e / d² · V · A, unbiased (k: the emitter of
+// a single triangle or of a quad's first half). What a light tree's sampled node takes for the
+// light it draws, where the ratio estimator's test points would cost more than its draw's noise.
+VL_HOSTDEV inline vec3 patchAreaSample(const TraceSceneView& s, const BvhView& bvh, uint32_t k, const vec3& p,
+                                       const vec3& ng, const vec3& ns, vec2 u) {
+    const int8_t quad = s.emitterQuad ? s.emitterQuad[k] : kQuadSingle;
+    uint32_t triangle = s.emitters[k];
+    float area = triangleArea(s, triangle);
+    if (quad == kQuadFirstHalf) {
+        // The quad's halves by area: u.x picks one and is reused within it.
+        const uint32_t second = s.emitters[k + 1];
+        const float secondArea = triangleArea(s, second);
+        const float share = area / (area + secondArea);
+        if (u.x < share) {
+            u.x = u.x / share;
+        } else {
+            u.x = glm::min((u.x - share) / (1.0f - share), 0.99999994f);
+            triangle = second;
         }
-    return sum / static_cast<float>(n * n);
+        area += secondArea;
+    }
+    const vec3 cross = windingCross(s, triangle);
+    const float twiceArea = glm::length(cross);
+    if (!(twiceArea > 0.0f)) return vec3(0.0f);
+    const vec3 emitterNormal = cross / twiceArea;
+    const vec3* v = s.vertices + 3 * static_cast<size_t>(triangle);
+    const float facing = glm::dot(p - v[0], emitterNormal);
+    if (facing == 0.0f || (facing < 0.0f && !s.materials[s.materialIds[triangle]].doubleSided)) return vec3(0.0f);
+    const vec3 towardReceiver = facing > 0.0f ? emitterNormal : -emitterNormal;
+    const vec2 b = sampleUniformTriangle(u);
+    const SurfaceHit point = surfaceAt(s, triangle, b.x, b.y);
+    vec3 wi;
+    const float g = geometricFactor(p, ng, ns, point.position, towardReceiver, wi);
+    if (!(g > 0.0f) || occluded(bvh, p, ng, point.position, towardReceiver)) return vec3(0.0f);
+    return emissionAt(s, point, -wi) * (g * area);
+}
+
+// The point and spot lights of a tree at a receiver, unbiased (light_tree.h); one shadow ray
+// per node of the cut. Zero without a tree.
+VL_HOSTDEV inline vec3 treePointLightsIrradiance(const TraceSceneView& s, const BvhView& bvh, const vec3& p,
+                                                 const vec3& ng, const vec3& ns, int budget, uint64_t seed) {
+    return estimateLightTree(s.pointLightTree, p, ns, budget, seed, [&](uint32_t light, int, bool) {
+        return punctualLightIrradiance(bvh, s.lights[light], p, ng, ns, vec2(0.0f));
+    });
+}
+
+// How many nodes the cut of the point lights' tree takes at a gather ray's hit: a record
+// averages its rays' hits, so one or two lights a hit suffice (docs/many-lights.md).
+constexpr int kHitLightCut = 2;
+
+// Σ over the punctual lights at p, a sun's disk at u ∈ [0, 1)²: each directional light, and
+// each point or spot light or, with their tree, its cut of `budget` (seeded by `seed`).
+VL_HOSTDEV inline vec3 punctualLightsIrradiance(const TraceSceneView& s, const BvhView& bvh, const vec3& p,
+                                                const vec3& ng, const vec3& ns, vec2 u, int budget, uint64_t seed) {
+    if (!s.pointLightTree.nodes) return punctualIrradiance(s, bvh, p, ng, ns, u);
+    const vec2 disk = sampleConcentricDisk(u);
+    vec3 e(0.0f);
+    for (uint32_t i = 0; i < s.lightCount; ++i)
+        if (s.lights[i].type == TraceLightType::Directional) e += punctualLightIrradiance(bvh, s.lights[i], p, ng, ns, disk);
+    return e + treePointLightsIrradiance(s, bvh, p, ng, ns, budget, seed);
 }
 
 // Direct irradiance E at a receiver sample (lights, emitters and the sky), deterministic per `seed`.
@@ -354,29 +379,109 @@ VL_HOSTDEV inline vec3 directIrradiance(const TraceSceneView& s, const BvhView& 
     vec3 ng = glm::normalize(glm::cross(v[1] - v[0], v[2] - v[0]));
     if (glm::dot(ng, r.normal) < 0.0f) ng = -ng;
     vec3 e(0.0f);
+    const bool pointTree = s.pointLightTree.nodes != nullptr;
     for (uint32_t i = 0; i < s.lightCount; ++i) {
         const TraceLight& light = s.lights[i];
         if (light.type == TraceLightType::Directional && light.cosHalfAngle < 1.0f)
             e += sunIrradiance(bvh, light, r.position, ng, r.normal, settings.emitterStrata, seed, i);
-        else
+        else if (light.type == TraceLightType::Directional || !pointTree)
             e += punctualLightIrradiance(bvh, light, r.position, ng, r.normal, vec2(0.0f));
     }
+    if (pointTree) e += treePointLightsIrradiance(s, bvh, r.position, ng, r.normal, settings.lightCut, seed);
     if (settings.skyAtSamples) e += skyIrradiance(s, bvh, r.position, ng, r.normal, settings.skyStrata, seed);
-    if (s.emitterCount > kMaxVisitedEmitters)
-        return e + sampledEmittersIrradiance(s, bvh, r.position, ng, r.normal, settings.emitterStrata, seed);
-    for (uint32_t k = 0; k < s.emitterCount; ++k) {
+    const auto patch = [&](uint32_t k) {
         const int8_t quad = s.emitterQuad ? s.emitterQuad[k] : kQuadSingle;
         if (quad == kQuadFirstHalf)
-            e += emitterQuadIrradiance(s, bvh, k, r.position, ng, r.normal, settings.emitterStrata, seed, k);
-        else if (quad == kQuadSingle)
-            e += emitterIrradiance(s, bvh, s.emitters[k], r.position, ng, r.normal, settings.emitterStrata, seed, k);
+            return emitterQuadIrradiance(s, bvh, k, r.position, ng, r.normal, settings.emitterStrata, seed, k);
+        if (quad == kQuadSingle)
+            return emitterIrradiance(s, bvh, s.emitters[k], r.position, ng, r.normal, settings.emitterStrata, seed, k);
+        return vec3(0.0f);
+    };
+    if (s.emitterTree.nodes) {
+        const uint64_t treeSeed = seed ^ 0x454D4954ull;  // "EMIT"
+        return e + estimateLightTree(s.emitterTree, r.position, r.normal, settings.lightCut, treeSeed,
+                                     [&](uint32_t k, int draw, bool alone) {
+                                         if (alone) return patch(k);
+                                         Pcg32 point = Pcg32::forItem(treeSeed, uint64_t(draw), 0x504F494Eull);  // "POIN"
+                                         vec2 u;
+                                         point.next2D(u.x, u.y);
+                                         return patchAreaSample(s, bvh, k, r.position, ng, r.normal, u);
+                                     });
     }
+    for (uint32_t k = 0; k < s.emitterCount; ++k) e += patch(k);
     return e;
 }
 
 }  // namespace vl
 
 namespace vl {
+
+// How many nodes a surface point's cut of a tree of many lights takes, per tree: a voxel
+// side averages several points and the bounces average the voxels (docs/many-lights.md).
+constexpr int kSurfacePointLightCut = 4;
+
+// One emitter patch's light at a surface point, by one shadow ray placed at u (the
+// surfacePointIrradiance below); k is the emitter of a single triangle or of a quad's first half.
+VL_HOSTDEV inline vec3 patchPointIrradiance(const TraceSceneView& s, const BvhView& bvh, uint32_t k, const vec3& p,
+                                            const vec3& ng, const vec3& ns, vec2 u, float layer, uint32_t* rays,
+                                            uint32_t* blocked) {
+    const int8_t quad = s.emitterQuad ? s.emitterQuad[k] : kQuadSingle;
+    if (quad == kQuadSecondHalf) return vec3(0.0f);
+    const uint32_t first = s.emitters[k];
+    const vec3* v = s.vertices + 3 * size_t(first);
+    const vec3 cross = glm::cross(v[1] - v[0], v[2] - v[0]);
+    const float twiceArea = glm::length(cross);
+    if (!(twiceArea > 0.0f)) return vec3(0.0f);
+    const vec3 emitterNormal = cross / twiceArea;
+    const TraceMaterial& material = s.materials[s.materialIds[first]];
+    const float facing = glm::dot(p - v[0], emitterNormal);
+    if (facing == 0.0f || (facing < 0.0f && !material.doubleSided)) return vec3(0.0f);
+    const vec3 towardReceiver = facing > 0.0f ? emitterNormal : -emitterNormal;
+    if (glm::abs(facing) < layer && glm::dot(ns, towardReceiver) < -0.5f) return vec3(0.0f);
+    // The patch: the quad's two halves, or the triangle; its unshadowed light and a point of it.
+    float unshadowed = 0.0f;
+    vec3 point, centre;
+    if (quad == kQuadFirstHalf) {
+        const vec3* w = s.vertices + 3 * size_t(s.emitters[k + 1]);
+        for (const vec3* t : {v, w}) {
+            const vec3 relative[3] = {t[0] - p, t[1] - p, t[2] - p};
+            unshadowed += clippedTriangleIrradiance(relative, ns);
+        }
+        const int own = sharedEdge(v, w).ownA;
+        point = v[own] + u.x * (v[(own + 1) % 3] - v[own]) + u.y * (v[(own + 2) % 3] - v[own]);
+        centre = 0.5f * (v[(own + 1) % 3] + v[(own + 2) % 3]);
+    } else {
+        const vec3 relative[3] = {v[0] - p, v[1] - p, v[2] - p};
+        unshadowed = clippedTriangleIrradiance(relative, ns);
+        const vec2 b = sampleUniformTriangle(u);
+        point = (1.0f - b.x - b.y) * v[0] + b.x * v[1] + b.y * v[2];
+        centre = (v[0] + v[1] + v[2]) * (1.0f / 3.0f);
+    }
+    if (!(unshadowed > 0.0f)) return vec3(0.0f);
+    vec3 radiance = material.emission;
+    if (material.emissiveTexture.texture >= 0) {
+        // Textured: the radiance where the ray lands (one stratum of the plain estimate).
+        const vec2 b = sampleUniformTriangle(u);
+        const SurfaceHit at = surfaceAt(s, first, b.x, b.y);
+        point = at.position;
+        radiance = emissionAt(s, at, glm::normalize(p - point));
+    }
+    // A point under the horizon cannot tell the patch's visibility: its centre does.
+    const auto above = [&](const vec3& q) {
+        const vec3 wi = q - p;
+        return glm::dot(ns, wi) > 0.0f && glm::dot(ng, wi) > 0.0f && -glm::dot(towardReceiver, wi) > 0.0f;
+    };
+    if (!above(point)) {
+        point = centre;
+        if (!above(point)) return vec3(0.0f);
+    }
+    const bool hidden = occluded(bvh, p, ng, point, towardReceiver);
+    if (rays) {
+        ++*rays;
+        if (hidden) ++*blocked;
+    }
+    return hidden ? vec3(0.0f) : radiance * unshadowed;
+}
 
 // Direct irradiance at one of many points that average over a surface together (a voxel
 // side's points, lighting/surface_points.h), without the sky: every light, a sun's disk and
@@ -389,82 +494,33 @@ namespace vl {
 // ceiling lights the ceiling it hides, and a voxel holding both would show that light where
 // the emitter is); 0 lights every emitter. `rays` and `blocked`, when given, count the shadow
 // rays that emitters and lights took (those with light to bring) and those that were blocked.
+// Past kLightTreeFrom lights or emitters, a cut of their tree stands for the visits.
 VL_HOSTDEV inline vec3 surfacePointIrradiance(const TraceSceneView& s, const BvhView& bvh, const vec3& p, const vec3& ng,
                                               const vec3& ns, vec2 u, float layer, uint64_t seed,
                                               uint32_t* rays = nullptr, uint32_t* blocked = nullptr) {
-    vec3 e(0.0f);
-    for (uint32_t i = 0; i < s.lightCount; ++i) {
-        const vec2 disk = s.lights[i].cosHalfAngle < 1.0f ? sampleConcentricDisk(u) : vec2(0.0f);
-        const PunctualArrival arrival = punctualArrival(s.lights[i], p, ng, ns, disk);
-        if (!(maxComponent(arrival.irradiance) > 0.0f)) continue;
+    const auto light = [&](const TraceLight& lamp) {
+        const vec2 disk = lamp.cosHalfAngle < 1.0f ? sampleConcentricDisk(u) : vec2(0.0f);
+        const PunctualArrival arrival = punctualArrival(lamp, p, ng, ns, disk);
+        if (!(maxComponent(arrival.irradiance) > 0.0f)) return vec3(0.0f);
         const bool hidden = arrivalBlocked(bvh, arrival, p, ng);
-        if (!hidden) e += arrival.irradiance;
         if (rays) {
             ++*rays;
             if (hidden) ++*blocked;
         }
-    }
-    if (s.emitterCount > kMaxVisitedEmitters) return e + sampledEmittersIrradiance(s, bvh, p, ng, ns, 1, seed);
-    for (uint32_t k = 0; k < s.emitterCount; ++k) {
-        const int8_t quad = s.emitterQuad ? s.emitterQuad[k] : kQuadSingle;
-        if (quad == kQuadSecondHalf) continue;
-        const uint32_t first = s.emitters[k];
-        const vec3* v = s.vertices + 3 * size_t(first);
-        const vec3 cross = glm::cross(v[1] - v[0], v[2] - v[0]);
-        const float twiceArea = glm::length(cross);
-        if (!(twiceArea > 0.0f)) continue;
-        const vec3 emitterNormal = cross / twiceArea;
-        const TraceMaterial& material = s.materials[s.materialIds[first]];
-        const float facing = glm::dot(p - v[0], emitterNormal);
-        if (facing == 0.0f || (facing < 0.0f && !material.doubleSided)) continue;
-        const vec3 towardReceiver = facing > 0.0f ? emitterNormal : -emitterNormal;
-        if (glm::abs(facing) < layer && glm::dot(ns, towardReceiver) < -0.5f) continue;
-        // The patch: the quad's two halves, or the triangle; its unshadowed light and a point of it.
-        float unshadowed = 0.0f;
-        vec3 point;
-        if (quad == kQuadFirstHalf) {
-            const uint32_t second = s.emitters[k + 1];
-            const vec3* w = s.vertices + 3 * size_t(second);
-            for (const vec3* t : {v, w}) {
-                const vec3 relative[3] = {t[0] - p, t[1] - p, t[2] - p};
-                unshadowed += clippedTriangleIrradiance(relative, ns);
-            }
-            const int own = sharedEdge(v, w).ownA;
-            point = v[own] + u.x * (v[(own + 1) % 3] - v[own]) + u.y * (v[(own + 2) % 3] - v[own]);
-        } else {
-            const vec3 relative[3] = {v[0] - p, v[1] - p, v[2] - p};
-            unshadowed = clippedTriangleIrradiance(relative, ns);
-            const vec2 b = sampleUniformTriangle(u);
-            point = (1.0f - b.x - b.y) * v[0] + b.x * v[1] + b.y * v[2];
-        }
-        if (!(unshadowed > 0.0f)) continue;
-        vec3 radiance = material.emission;
-        if (material.emissiveTexture.texture >= 0) {
-            // Textured: the radiance where the ray lands (one stratum of the plain estimate).
-            const vec2 b = sampleUniformTriangle(u);
-            const SurfaceHit at = surfaceAt(s, first, b.x, b.y);
-            point = at.position;
-            radiance = emissionAt(s, at, glm::normalize(p - point));
-        }
-        // A point under the horizon cannot tell the patch's visibility: its centre does.
-        const auto above = [&](const vec3& q) {
-            const vec3 wi = q - p;
-            return glm::dot(ns, wi) > 0.0f && glm::dot(ng, wi) > 0.0f && -glm::dot(towardReceiver, wi) > 0.0f;
-        };
-        if (!above(point)) {
-            point = quad == kQuadFirstHalf
-                        ? 0.5f * (v[(sharedEdge(v, s.vertices + 3 * size_t(s.emitters[k + 1])).ownA + 1) % 3] +
-                                  v[(sharedEdge(v, s.vertices + 3 * size_t(s.emitters[k + 1])).ownA + 2) % 3])
-                        : (v[0] + v[1] + v[2]) * (1.0f / 3.0f);
-            if (!above(point)) continue;
-        }
-        const bool hidden = occluded(bvh, p, ng, point, towardReceiver);
-        if (!hidden) e += radiance * unshadowed;
-        if (rays) {
-            ++*rays;
-            if (hidden) ++*blocked;
-        }
-    }
+        return hidden ? vec3(0.0f) : arrival.irradiance;
+    };
+    vec3 e(0.0f);
+    const bool pointTree = s.pointLightTree.nodes != nullptr;
+    for (uint32_t i = 0; i < s.lightCount; ++i)
+        if (!pointTree || s.lights[i].type == TraceLightType::Directional) e += light(s.lights[i]);
+    if (pointTree)
+        e += estimateLightTree(s.pointLightTree, p, ns, kSurfacePointLightCut, seed,
+                               [&](uint32_t i, int, bool) { return light(s.lights[i]); });
+    if (s.emitterTree.nodes)
+        return e + estimateLightTree(s.emitterTree, p, ns, kSurfacePointLightCut, seed ^ 0x454D4954ull, [&](uint32_t k, int, bool) {
+                   return patchPointIrradiance(s, bvh, k, p, ng, ns, u, layer, rays, blocked);
+               });
+    for (uint32_t k = 0; k < s.emitterCount; ++k) e += patchPointIrradiance(s, bvh, k, p, ng, ns, u, layer, rays, blocked);
     return e;
 }
 

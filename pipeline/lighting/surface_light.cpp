@@ -94,6 +94,7 @@ std::vector<FaceRadiance> punctualFaceRadiance(const VoxelScene& voxels, const V
     if (scene.lightCount == 0) return {};
     TraceSceneView lightsOnly = scene;
     lightsOnly.emitterCount = 0;
+    lightsOnly.emitterTree = {};
     VoxelScene lit = voxels;
     lightVoxelsByRays(lit, points, lightsOnly, bvh, 0);
     return std::move(lit.faceRadiance);

@@ -73,9 +73,52 @@ std::string where(const Scene& scene, const Mesh& mesh) {
     return scene.sourcePath + ": mesh '" + mesh.name + "'";
 }
 
+// The trees of many lights (light_tree.h). A point light's power is its intensity summed over
+// RGB; an emitter patch's, its radiance summed over RGB times its area, its cone the normal
+// (every way when two-sided).
+void buildLightTrees(TraceScene& out) {
+    std::vector<LightBounds> points;
+    for (size_t i = 0; i < out.lights.size(); ++i) {
+        const TraceLight& light = out.lights[i];
+        if (light.type == TraceLightType::Directional) continue;
+        LightBounds b;
+        b.boundsMin = b.boundsMax = light.position;
+        b.power = light.intensity.x + light.intensity.y + light.intensity.z;
+        b.item = uint32_t(i);
+        points.push_back(b);
+    }
+    if (points.size() > kLightTreeFrom) out.pointLightTree = buildLightTree(std::move(points));
+    if (out.emitters.size() <= kLightTreeFrom) return;
+    std::vector<LightBounds> patches;
+    for (size_t k = 0; k < out.emitters.size(); ++k) {
+        if (out.emitterQuad[k] == kQuadSecondHalf) continue;
+        const uint32_t first = out.emitters[k];
+        const TraceMaterial& m = out.materials[out.materialIds[first]];
+        LightBounds b;
+        const vec3* v = &out.vertices[3 * size_t(first)];
+        b.boundsMin = glm::min(v[0], glm::min(v[1], v[2]));
+        b.boundsMax = glm::max(v[0], glm::max(v[1], v[2]));
+        const vec3 cross = glm::cross(v[1] - v[0], v[2] - v[0]);
+        float area = 0.5f * glm::length(cross);
+        if (out.emitterQuad[k] == kQuadFirstHalf) {
+            const vec3* w = &out.vertices[3 * size_t(out.emitters[k + 1])];
+            b.boundsMin = glm::min(b.boundsMin, glm::min(w[0], glm::min(w[1], w[2])));
+            b.boundsMax = glm::max(b.boundsMax, glm::max(w[0], glm::max(w[1], w[2])));
+            area += 0.5f * glm::length(glm::cross(w[1] - w[0], w[2] - w[0]));
+        }
+        b.axis = glm::normalize(cross);
+        b.cosSpread = m.doubleSided ? -1.0f : 1.0f;
+        // A textured emitter's power by its factor: the tree only weighs, the leaf is exact.
+        b.power = area * (m.emission.x + m.emission.y + m.emission.z);
+        b.item = uint32_t(k);
+        patches.push_back(b);
+    }
+    out.emitterTree = buildLightTree(std::move(patches));
+}
+
 }  // namespace
 
-TraceScene TraceScene::build(const Scene& scene, const SceneTriangles& triangles) {
+TraceScene TraceScene::build(const Scene& scene, const SceneTriangles& triangles, bool lightTrees) {
     TraceScene out;
     const size_t triangleCount = triangles.meshIndex.size();
 
@@ -279,6 +322,7 @@ TraceScene TraceScene::build(const Scene& scene, const SceneTriangles& triangles
             previous = cdf;
         }
     }
+    if (lightTrees) buildLightTrees(out);
     return out;
 }
 
@@ -303,6 +347,8 @@ TraceSceneView TraceScene::view() const {
     v.emitterSelectPdf = emitterSelectPdf.empty() ? nullptr : emitterSelectPdf.data();
     v.emitterQuad = emitterQuad.empty() ? nullptr : emitterQuad.data();
     v.emitterCount = static_cast<uint32_t>(emitters.size());
+    v.pointLightTree = {pointLightTree.empty() ? nullptr : pointLightTree.data(), uint32_t(pointLightTree.size())};
+    v.emitterTree = {emitterTree.empty() ? nullptr : emitterTree.data(), uint32_t(emitterTree.size())};
     v.sky.uniform = skyUniform;
     if (skyImage) {
         v.sky.texels = skyImage->texels.data();
@@ -323,6 +369,7 @@ size_t TraceScene::memoryBytes() const {
            materials.size() * sizeof(TraceMaterial) + textures.size() * sizeof(TraceTexture) +
            texels.size() * sizeof(float) + lights.size() * sizeof(TraceLight) + emitters.size() * sizeof(uint32_t) +
            emitterCdf.size() * sizeof(float) + emitterSelectPdf.size() * sizeof(float) + emitterQuad.size() +
+           (pointLightTree.size() + emitterTree.size()) * sizeof(LightTreeNode) +
            (skyImage ? skyImage->texels.size() * sizeof(vec3) : 0) + (skyRowCdf.size() + skyColumnCdf.size()) * sizeof(float);
 }
 

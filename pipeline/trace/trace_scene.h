@@ -7,6 +7,7 @@
 #pragma once
 
 #include "core/math.h"
+#include "trace/light_tree.h"
 #include "trace/materials.h"
 #include "trace/sky.h"
 
@@ -88,6 +89,12 @@ struct TraceSceneView {
     const int8_t* emitterQuad = nullptr;
     uint32_t emitterCount = 0;
 
+    // Past kLightTreeFrom: the point and spot lights (items: indices into lights), and the
+    // emitters' patches (items: the emitter of a single triangle or of a quad's first half).
+    // A directional light is never in a tree. Null nodes: every receiver visits each.
+    LightTreeView pointLightTree;
+    LightTreeView emitterTree;
+
     SkyView sky;  // Scene::sky: what a ray that leaves the scene sees
     // Some directional light has a disk (TraceLight::cosHalfAngle < 1): only then do paths
     // draw a point of it, so scenes without one keep their random sequences.
@@ -99,7 +106,8 @@ constexpr int8_t kQuadSingle = 0, kQuadFirstHalf = 1, kQuadSecondHalf = 2;
 class TraceScene {
 public:
     // Throws InputError naming the file, mesh and element for geometry that would produce NaN.
-    static TraceScene build(const Scene& scene, const SceneTriangles& triangles);
+    // lightTrees false: no trees of many lights, every receiver visits every light.
+    static TraceScene build(const Scene& scene, const SceneTriangles& triangles, bool lightTrees = true);
 
     TraceSceneView view() const;
     size_t memoryBytes() const;
@@ -118,6 +126,8 @@ public:
     std::vector<float> emitterCdf;
     std::vector<float> emitterSelectPdf;
     std::vector<int8_t> emitterQuad;
+    std::vector<LightTreeNode> pointLightTree;
+    std::vector<LightTreeNode> emitterTree;
     // Scene::sky: its uniform part, image (sky.h) and the image's sampling tables.
     vec3 skyUniform{0.0f};
     std::shared_ptr<const SkyImage> skyImage;
