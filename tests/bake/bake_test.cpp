@@ -472,8 +472,7 @@ TEST_CASE("Many lights by their trees bake the light of every light visited: eac
     // each wall's mean direct and indirect light must match the bake that visits every light
     // (many-lights each) to within the estimates' noise averaged over the wall: 2%. With the
     // emitters' tree left in the voxels' lights-only pass, the emitters' light was taken out of
-    // every hit and never put back: the indirect light was 7% low on the hall of
-    // docs/many-lights.md.
+    // every hit and never put back, and the indirect light came out low (docs/many-lights.md).
     const Scene scene = manyLightsRoom();
     BakeSettings settings = quietSettings();
     settings.voxel.resolution = 32;

@@ -188,8 +188,9 @@ TEST_CASE("Many lights by their trees at the receivers and the voxels' points ag
     const double pointBias = pointSigned / n / mean, pointRms = std::sqrt(pointSquares / n) / mean;
     INFO("receivers: mean error " << bias << ", RMS " << rms << " of the mean light; surface points (16 each): mean "
                                   << pointBias << ", RMS " << pointRms);
-    // Measured: receivers (a cut of 64 a tree) 3.6% RMS, surface points (a cut of 4) 8.3% over
-    // 16 points; most of it in the ledge's partial shadow, which no unshadowed bound foresees.
+    // The RMS bounds are the cuts' noise (64 nodes at a receiver, 4 at a surface point over 16
+    // points), most of it in the ledge's partial shadow, which no unshadowed bound foresees;
+    // docs/many-lights.md gives what they measure.
     CHECK(std::abs(bias) < 0.01);
     CHECK(rms < 0.05);
     CHECK(std::abs(pointBias) < 0.01);
