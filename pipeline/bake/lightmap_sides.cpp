@@ -80,24 +80,35 @@ SideView lookFrom(const BvhView& bvh, const TraceSceneView& scene, const vec3* c
     return view;
 }
 
-// How many of a triangle's lookout points have open space on the side `normal`
-// faces: probed two cells out, or halfway to a surface nearer than that (a gap too thin to
-// stand in, which the grid marks crossed). Two cells clear the triangle's own cells.
-int openPoints(const OpenSpace& space, const BvhView& bvh, const vec3* corner, const vec3& normal) {
-    const std::array<vec3, 4> points = lookoutPoints(corner);
+// Whether open space lies on the side `normal` faces of `point`: probed two cells out, or
+// halfway to a surface nearer than that (a gap too thin to stand in, which the grid marks
+// crossed). Two cells clear the point's own cells.
+bool facesOpenSpace(const OpenSpace& space, const BvhView& bvh, const vec3& point, const vec3& normal) {
     const float reach = 2.0f * space.cellSize();
+    Ray ray;
+    ray.origin = offsetRayOrigin(point, normal, bvh.extent);
+    ray.direction = normal;
+    ray.tMax = reach;
+    Hit hit;
+    const float distance = intersectClosest(bvh, ray, hit) ? 0.5f * hit.t : reach;
+    return space.open(ray.origin + distance * normal);
+}
+
+// How many of a triangle's lookout points face open space on the side `normal` faces.
+int openPoints(const OpenSpace& space, const BvhView& bvh, const vec3* corner, const vec3& normal) {
     int open = 0;
-    for (const vec3& point : points) {
-        Ray ray;
-        ray.origin = offsetRayOrigin(point, normal, bvh.extent);
-        ray.direction = normal;
-        ray.tMax = reach;
-        Hit hit;
-        const float distance = intersectClosest(bvh, ray, hit) ? 0.5f * hit.t : reach;
-        open += space.open(ray.origin + distance * normal);
-    }
+    for (const vec3& point : lookoutPoints(corner)) open += facesOpenSpace(space, bvh, point, normal);
     return open;
 }
+
+// What a triangle's samples hold: its decision, or, where one side was sealed at the lookout
+// points and the other sees outdoors, the sealed side at each sample that faces open space.
+enum SideChoice : uint8_t {
+    kKeepFront = 0,
+    kTurn = 1,
+    kTurnUnlessFrontOpen = 2,  // the front sealed at the lookouts, the back outdoors
+    kKeepUnlessBackOpen = 3,   // the back sealed at the lookouts, the front outdoors
+};
 
 }  // namespace
 
@@ -112,7 +123,7 @@ size_t orientLightmapSamples(SurfaceSampleSet& samples, const BvhView& bvh, cons
     std::vector<uint32_t> triangles;
     for (uint32_t t = 0; t < scene.triangleCount; ++t)
         if (held[t]) triangles.push_back(t);
-    std::vector<uint8_t> turn(scene.triangleCount, 0);
+    std::vector<uint8_t> choice(scene.triangleCount, kKeepFront);
     vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
     for (size_t k = 0; k < 3 * size_t(scene.triangleCount); ++k) {
         lo = glm::min(lo, scene.vertices[k]);
@@ -139,18 +150,41 @@ size_t orientLightmapSamples(SurfaceSampleSet& samples, const BvhView& bvh, cons
                    (side.behind == kSideRays && (space.empty() || openPoints(space, bvh, v, normal) == 0));
         };
         const bool frontEnclosed = enclosed(front, n), backEnclosed = enclosed(back, -n);
-        if (backEnclosed) return;
+        // Four lookout points stand for the whole triangle: a tall wall triangle whose points
+        // all lie behind a panel hung on it looked sealed on the room's side, and the strip of
+        // it the room sees above the panel showed the sunlit outer face. Such a triangle's
+        // samples are tested one by one when the other side sees outdoors.
+        if (backEnclosed) {
+            if (!frontEnclosed && front.open >= kClearlyFewer && !space.empty()) choice[t] = kKeepUnlessBackOpen;
+            return;
+        }
+        if (frontEnclosed && back.open >= kClearlyFewer && !space.empty()) {
+            choice[t] = kTurnUnlessFrontOpen;
+            return;
+        }
         const bool skyDecides = std::abs(back.open - front.open) >= kClearlyFewer;
         if (frontEnclosed || back.open + kClearlyFewer <= front.open ||
             (!skyDecides && front.reach < kMuchNearer * back.reach))
-            turn[t] = 1;
+            choice[t] = kTurn;
     });
-    size_t turned = 0;
-    for (uint32_t t : triangles) turned += turn[t];
-    if (turned == 0) return 0;
+    size_t turned = 0, tested = 0;
+    for (uint32_t t : triangles) {
+        turned += choice[t] == kTurn || choice[t] == kTurnUnlessFrontOpen;
+        tested += choice[t] != kKeepFront;
+    }
+    if (tested == 0) return 0;
     tbb::parallel_for(size_t(0), samples.samples.size(), [&](size_t k) {
         SurfaceSample& s = samples.samples[k];
-        if (s.triangle < scene.triangleCount && turn[s.triangle]) s.normal = -s.normal;
+        if (s.triangle >= scene.triangleCount) return;
+        const uint8_t c = choice[s.triangle];
+        if (c == kKeepFront) return;
+        bool turn = c == kTurn;
+        if (c == kTurnUnlessFrontOpen || c == kKeepUnlessBackOpen) {
+            const vec3 n = glm::normalize(windingCross(scene, s.triangle));
+            turn = c == kTurnUnlessFrontOpen ? !facesOpenSpace(space, bvh, s.position, n)
+                                             : facesOpenSpace(space, bvh, s.position, -n);
+        }
+        if (turn) s.normal = -s.normal;
     });
     return turned;
 }

@@ -23,7 +23,7 @@ enum class LightmapSide {
 };
 
 // Changes when the rule below does: caches of what it decides (the bench's references) key on it.
-constexpr int kLightmapSideRule = 3;
+constexpr int kLightmapSideRule = 4;
 
 LightmapSide parseLightmapSide(const std::string& text);  // SettingsError naming lightmap-side
 const char* toString(LightmapSide side);
@@ -34,7 +34,9 @@ const char* toString(LightmapSide side);
 // the viewpoints (bake/open_space.h) reach. Otherwise the back is taken when the front is
 // enclosed or its rays leave the scene at least 4 fewer times, or, where the sky does not tell
 // them apart, when the front's rays meet something four times nearer (a frame's face against
-// its wall). The same bytes at any thread count. Returns the triangles turned.
+// its wall). Where one side is sealed at those points and the other sees outdoors, each sample
+// that faces open space on the sealed side holds that side (a wall's strip above a panel hung
+// on it). The same bytes at any thread count. Returns the triangles turned (wholly or in part).
 size_t orientLightmapSamples(SurfaceSampleSet& samples, const BvhView& bvh, const TraceSceneView& scene,
                              const std::vector<Viewpoint>& viewpoints);
 

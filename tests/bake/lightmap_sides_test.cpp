@@ -26,6 +26,23 @@ void addBoxFacingIn(Scene& scene, int material, const vec3& lo, const vec3& hi) 
     addQuad(scene, "wall+z", material, p001, p011, p111, p101);
 }
 
+// The 2 m room's ceiling at y = 2 round a 1 m skylight, normals −Y (facing into the room).
+void addCeilingRoundSkylight(Scene& scene, int material) {
+    const float s = 1.0f, h = 2.0f, w = 0.5f;
+    addQuad(scene, "ceiling-z", material, {-s, h, -s}, {s, h, -s}, {s, h, -w}, {-s, h, -w});
+    addQuad(scene, "ceiling+z", material, {-s, h, w}, {s, h, w}, {s, h, s}, {-s, h, s});
+    addQuad(scene, "ceiling-x", material, {-s, h, -w}, {-w, h, -w}, {-w, h, w}, {-s, h, w});
+    addQuad(scene, "ceiling+x", material, {w, h, -w}, {s, h, -w}, {s, h, w}, {w, h, w});
+}
+
+// A camera standing in the 2 m room, looking at its wall at z = −1.
+void addRoomCamera(Scene& scene) {
+    Camera camera;
+    camera.position = vec3(0.0f, 1.0f, 0.9f);
+    camera.forward = vec3(0.0f, 0.0f, -1.0f);
+    scene.cameras.push_back(camera);
+}
+
 Scene lidOnABlackBox() {
     Scene scene;
     const int black = addLambert(scene, vec3(0.0f));
@@ -109,10 +126,7 @@ Scene rugInARoomWoundOutward() {
     addQuad(scene, "ceiling+x", black, {w, h, -w}, {w, h, w}, {s, h, w}, {s, h, -w});
     const float y = 0.01f, r = 0.4f;
     addQuad(scene, "rug", rug, {-r, y, -r}, {r, y, -r}, {r, y, r}, {-r, y, r});  // normal −Y
-    Camera camera;
-    camera.position = vec3(0.0f, 1.0f, 0.9f);
-    camera.forward = vec3(0.0f, 0.0f, -1.0f);
-    scene.cameras.push_back(camera);
+    addRoomCamera(scene);
     return scene;
 }
 
@@ -161,19 +175,13 @@ Scene panelAgainstAWall() {
     const int black = addLambert(scene, vec3(0.0f));
     const int panel = addLambert(scene, vec3(0.5f));
     scene.materials[size_t(panel)].doubleSided = true;
-    const float s = 1.0f, h = 2.0f, w = 0.5f;
+    const float s = 1.0f, h = 2.0f;
     addBoxFacingIn(scene, black, vec3(-s, 0.0f, -s), vec3(s, h, s));
     // The ceiling round the skylight, normals −Y.
-    addQuad(scene, "ceiling-z", black, {-s, h, -s}, {s, h, -s}, {s, h, -w}, {-s, h, -w});
-    addQuad(scene, "ceiling+z", black, {-s, h, w}, {s, h, w}, {s, h, s}, {-s, h, s});
-    addQuad(scene, "ceiling-x", black, {-s, h, -w}, {-w, h, -w}, {-w, h, w}, {-s, h, w});
-    addQuad(scene, "ceiling+x", black, {w, h, -w}, {s, h, -w}, {s, h, w}, {w, h, w});
+    addCeilingRoundSkylight(scene, black);
     const float z = -s + 0.005f, r = 0.3f, y0 = 0.7f, y1 = 1.3f;
     addQuad(scene, "panel", panel, {-r, y0, z}, {-r, y1, z}, {r, y1, z}, {r, y0, z});  // normal −Z
-    Camera camera;
-    camera.position = vec3(0.0f, 1.0f, 0.9f);
-    camera.forward = vec3(0.0f, 0.0f, -1.0f);
-    scene.cameras.push_back(camera);
+    addRoomCamera(scene);
     return scene;
 }
 
@@ -210,6 +218,73 @@ TEST_CASE("A panel wound facing its wall: inside holds the side the room sees, l
         else
             CHECK(mean == Approx(centre).epsilon(0.05));
     }
+}
+
+namespace {
+
+// The same black room with its skylight, but its wall at z = −1 is one double-sided sheet wound
+// facing the room, the outdoors behind it (the sky all round). A black panel hangs 5 mm in front
+// of it, from the floor to 1.75 m, as wide as the room but for a centimetre each side: the four
+// points each of the sheet's two triangles is probed from (their centroids and halfway to their
+// corners, up to 1.67 m) all lie behind it, and the room sees the strip above it.
+constexpr float kPanelTop = 1.75f;
+Scene wallBehindAPanel() {
+    Scene scene;
+    const int black = addLambert(scene, vec3(0.0f));
+    const int sheet = addLambert(scene, vec3(0.0f));
+    scene.materials[size_t(sheet)].doubleSided = true;
+    const float s = 1.0f, h = 2.0f;
+    const vec3 p000(-s, 0, -s), p100(s, 0, -s), p010(-s, h, -s), p110(s, h, -s);
+    const vec3 p001(-s, 0, s), p101(s, 0, s), p011(-s, h, s), p111(s, h, s);
+    addQuad(scene, "floor", black, p000, p001, p101, p100);
+    addQuad(scene, "wall-x", black, p000, p010, p011, p001);
+    addQuad(scene, "wall+x", black, p100, p101, p111, p110);
+    addQuad(scene, "wall+z", black, p001, p011, p111, p101);
+    addQuad(scene, "sheet", sheet, p000, p100, p110, p010);  // normal +Z; uv v = 1 − y / h
+    addCeilingRoundSkylight(scene, black);
+    const float z = -s + 0.005f, r = s - 0.01f;
+    addQuad(scene, "panel", black, {-r, 0.0f, z}, {r, 0.0f, z}, {r, kPanelTop, z}, {-r, kPanelTop, z});  // normal +Z
+    addRoomCamera(scene);
+    return scene;
+}
+
+}  // namespace
+
+TEST_CASE("A wall's strip above a panel hung on it: inside holds the room's side there, the outdoors behind the "
+          "panel",
+          "[bake]") {
+    // Outdoors the sheet faces the whole uniform sky: L = 1 at its texels. The strip's room side
+    // sees the sky only through the skylight: L × the form factor, a few hundredths. Behind the
+    // panel neither side is seen from the room, and the sheet's outer face is what the outdoors
+    // sees. Before each sample was probed, the whole sheet held the outdoors.
+    const Scene scene = wallBehindAPanel();
+    const BakedLightmap lightmap = meshLightmapUnderSky(scene, LightmapSide::Inside, "sheet");
+    const int n = lightmap.total.width;
+    REQUIRE(n == 32);
+    // Rows whose texel centres lie 5–17 cm under the ceiling, in the strip; columns the middle half.
+    double strip = 0.0, formFactor = 0.0, behind = 0.0;
+    int stripTexels = 0, behindTexels = 0;
+    for (int y = 0; y < n; ++y) {
+        const float height = 2.0f * (1.0f - (float(y) + 0.5f) / float(n));
+        for (int x = n / 4; x < 3 * n / 4; ++x) {
+            const float across = 2.0f * (float(x) + 0.5f) / float(n) - 1.0f;
+            if (height > 1.83f && height < 1.95f) {
+                strip += lightmap.total.at(x, y, 1);
+                formFactor += skylightFormFactor(vec3(across, height, -1.0f));
+                ++stripTexels;
+            } else if (height < kPanelTop - 0.15f && height > 0.15f) {
+                behind += lightmap.total.at(x, y, 1);
+                ++behindTexels;
+            }
+        }
+    }
+    REQUIRE(stripTexels >= 16);
+    strip /= stripTexels;
+    formFactor /= stripTexels;
+    behind /= behindTexels;
+    INFO("strip " << strip << " against the skylight's form factor " << formFactor << ", behind the panel " << behind);
+    CHECK(strip == Approx(formFactor).epsilon(0.1));
+    CHECK(behind == Approx(1.0).epsilon(0.02));
 }
 
 TEST_CASE("lightmap-side takes front and inside and names itself when wrong", "[bake]") {
