@@ -223,12 +223,12 @@ TEST_CASE("A panel wound facing its wall: inside holds the side the room sees, l
 namespace {
 
 // The same black room with its skylight, but its wall at z = −1 is one double-sided sheet wound
-// facing the room, the outdoors behind it (the sky all round). A black panel hangs 5 mm in front
+// facing the room (or outward), the outdoors behind it (the sky all round). A black panel hangs 5 mm in front
 // of it, from the floor to 1.75 m, as wide as the room but for a centimetre each side: the four
 // points each of the sheet's two triangles is probed from (their centroids and halfway to their
 // corners, up to 1.67 m) all lie behind it, and the room sees the strip above it.
 constexpr float kPanelTop = 1.75f;
-Scene wallBehindAPanel() {
+Scene wallBehindAPanel(bool woundOutward) {
     Scene scene;
     const int black = addLambert(scene, vec3(0.0f));
     const int sheet = addLambert(scene, vec3(0.0f));
@@ -240,7 +240,9 @@ Scene wallBehindAPanel() {
     addQuad(scene, "wall-x", black, p000, p010, p011, p001);
     addQuad(scene, "wall+x", black, p100, p101, p111, p110);
     addQuad(scene, "wall+z", black, p001, p011, p111, p101);
-    addQuad(scene, "sheet", sheet, p000, p100, p110, p010);  // normal +Z; uv v = 1 − y / h
+    // Normal +Z (−Z wound outward); uv v = 1 − y / h either way.
+    if (woundOutward) addQuad(scene, "sheet", sheet, p100, p000, p010, p110);
+    else addQuad(scene, "sheet", sheet, p000, p100, p110, p010);
     addCeilingRoundSkylight(scene, black);
     const float z = -s + 0.005f, r = s - 0.01f;
     addQuad(scene, "panel", black, {-r, 0.0f, z}, {r, 0.0f, z}, {r, kPanelTop, z}, {-r, kPanelTop, z});  // normal +Z
@@ -257,7 +259,9 @@ TEST_CASE("A wall's strip above a panel hung on it: inside holds the room's side
     // sees the sky only through the skylight: L × the form factor, a few hundredths. Behind the
     // panel neither side is seen from the room, and the sheet's outer face is what the outdoors
     // sees. Before each sample was probed, the whole sheet held the outdoors.
-    const Scene scene = wallBehindAPanel();
+    // Wound outward, the sheet's back is what the panel seals and the strip is its back.
+    const bool woundOutward = GENERATE(false, true);
+    const Scene scene = wallBehindAPanel(woundOutward);
     const BakedLightmap lightmap = meshLightmapUnderSky(scene, LightmapSide::Inside, "sheet");
     const int n = lightmap.total.width;
     REQUIRE(n == 32);
@@ -282,7 +286,7 @@ TEST_CASE("A wall's strip above a panel hung on it: inside holds the room's side
     strip /= stripTexels;
     formFactor /= stripTexels;
     behind /= behindTexels;
-    INFO("strip " << strip << " against the skylight's form factor " << formFactor << ", behind the panel " << behind);
+    INFO((woundOutward ? "wound outward: " : "wound facing the room: ") << "strip " << strip << " against the skylight's form factor " << formFactor << ", behind the panel " << behind);
     CHECK(strip == Approx(formFactor).epsilon(0.1));
     CHECK(behind == Approx(1.0).epsilon(0.02));
 }
