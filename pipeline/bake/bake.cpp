@@ -487,6 +487,7 @@ ReceiverLighting ReceiverShading::shadeAtlasRows(const LightmapAtlas& given, int
         texels.brightSamples = settings_.brightPatches.samples;
         texels.skyDrawsPerAxis = settings_.direct.skyStrata;
         texels.filterPasses = settings_.lightmapFilterPasses;
+        texels.gradients = settings_.lightmapGradients;
         texels.direct = direct;
         texels.direct.skyAtSamples = false;
         texels.gatherSky = skyInRecords;

@@ -165,6 +165,8 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          }},
         {"near-field", "a lightmap record's ray that hits a surface nearer than this many voxels traces the light there on, by a path of cosine rays, instead of reading the voxel, which a crease narrower than a voxel shares with the open surface beside it; 0: every hit reads its voxel (default 1)",
          [](S& s, const std::string& v) { s.nearFieldVoxels = static_cast<float>(parseRealSetting("near-field", v, 0, 64)); }},
+        {"lightmap-gradients", "a lightmap's texels take their gather records' light turned to their own normal by the records' rotation gradients, seen by the records' own rays (Ward and Heckbert's): a curved cushion's or a moulding's texels face a little away from their records (default true)",
+         [](S& s, const std::string& v) { s.lightmapGradients = parseBoolSetting("lightmap-gradients", v); }},
         {"lightmap-stitch", "stitch lightmap chart seams: where one surface is split between two charts, move the texels on both sides by a small least-squares solve so they read one value on the split itself (default true)",
          [](S& s, const std::string& v) { s.lightmapStitch = parseBoolSetting("lightmap-stitch", v); }},
         {"lightmap-subsamples", "n × n sub-texel probes per texel (default 4)",
@@ -319,6 +321,7 @@ std::string describeBakeSettings(const BakeSettings& s) {
     if (s.lambertMaterials) out << ", materials=lambert";
     if (s.lightmapSide != LightmapSide::Inside) out << ", lightmap-side=" << toString(s.lightmapSide);
     if (!s.lightmapStitch) out << ", lightmap-stitch=false";
+    if (!s.lightmapGradients) out << ", lightmap-gradients=false";
     if (!s.hitLightExact) out << ", hit-light=voxels";
     if (!s.lightTrees) out << ", many-lights=each";
     if (s.direct.lightCut != DirectLightSettings{}.lightCut) out << ", light-cut=" << s.direct.lightCut;

@@ -113,6 +113,7 @@ struct BakeSettings {
     LightmapGather lightmapGather = LightmapGather::Texels;
     int texelGatherSpacing = 0;
     int lightmapFilterPasses = 3;  // the texel records' edge-stopping filter (bake/texel_gather.h); 0: off
+    bool lightmapGradients = true;  // the texel records' rotation gradients (bake/texel_gather.h)
     LightmapSide lightmapSide = LightmapSide::Inside;  // a double-sided surface's side lightmaps hold (bake/lightmap_sides.h)
     int gatherRays = 14;
     int bounceRays = 14;

@@ -193,6 +193,21 @@ vec3 lightsReflectedAt(const TraceSceneView& scene, const BvhView& bvh, const Ra
 
 }  // namespace
 
+std::vector<vec2> fanTurnWeights(int n) {
+    constexpr int kPoints = 16;  // per axis of a stratum
+    std::vector<vec2> weights(size_t(n) * size_t(n), vec2(0.0f));
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j)
+            for (int a = 0; a < kPoints; ++a)
+                for (int b = 0; b < kPoints; ++b) {
+                    const vec2 d = sampleConcentricDisk(
+                        vec2(float(i) + (float(a) + 0.5f) / kPoints, float(j) + (float(b) + 0.5f) / kPoints) / float(n));
+                    weights[size_t(i * n + j)] +=
+                        d / (std::sqrt(std::max(1e-6f, 1.0f - glm::dot(d, d))) * float(kPoints * kPoints));
+                }
+    return weights;
+}
+
 std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& mips,
                              const std::vector<FaceRadiance>& faces, const BvhView& bvh, const TraceSceneView& scene,
                              int raysPerAxis, Progress* progress, FanExtras* extras, int skyDrawsPerAxis) {
@@ -202,10 +217,13 @@ std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& m
         extras->sky.assign(fans.size(), vec3(0.0f));
         extras->variance.assign(fans.size(), 0.0f);
         extras->escaped.assign(fans.size(), 0u);
+        extras->rotation.assign(extras->rotationGradients ? fans.size() : 0, RotationGradients{});
     }
     if (mips.levelCount <= 0) return irradiance;
     const std::vector<vec3> pattern = fanPattern(raysPerAxis);
     const float rays = float(pattern.size());
+    const bool rotation = extras && extras->rotationGradients;
+    const std::vector<vec2> turnWeights = rotation ? fanTurnWeights(raysPerAxis) : std::vector<vec2>();
     const HitLookup level0 = hitLookup(mips.levels[0], faces.size());
     const bool sky = extras && extras->readSky && scene.sky.present();
     const std::vector<FaceRadiance>* lights = extras && scene.lightCount > 0 ? extras->lightsAtHits : nullptr;
@@ -273,11 +291,23 @@ std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& m
             vec3 sum(0.0f), open(0.0f);
             double squares = 0.0, values = 0.0;  // of every ray's radiance, the sky's too
             uint32_t escaped = 0;
+            RotationGradients turned;
+            size_t slot = 0;  // the ray's stratum in the fan
+            // A ray's light and sky into the rotation gradients, by its stratum's weight.
+            const auto turn = [&](const vec3& light, const vec3& skyLight) {
+                const vec2 w = turnWeights[slot];
+                const vec3 along = (kPi / rays) * (w.x * fans[q].frame.tangent + w.y * fans[q].frame.bitangent);
+                turned.light += glm::outerProduct(light, along);
+                turned.sky += glm::outerProduct(skyLight, along);
+            };
             traceFan(
                 fans[q], pattern, bvh,
                 [&](const Ray& ray) {
                     ++escaped;
-                    if (!sky) return;
+                    if (!sky) {
+                        ++slot;
+                        return;
+                    }
                     vec3 L;
                     if (scene.sky.hasImage()) {
                         const SkySeen seen = skySeenAlong(scene.sky, ray.direction);
@@ -287,6 +317,8 @@ std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& m
                         open += scene.sky.uniform * (kPi / rays);
                         L = scene.sky.uniform;
                     }
+                    if (rotation) turn(vec3(0.0f), L);
+                    ++slot;
                     const double l = (double(L.x) + double(L.y) + double(L.z)) / 3.0;
                     squares += l * l;
                     values += l;
@@ -295,6 +327,8 @@ std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& m
                     const vec3 L = hit.t < nearField ? tracedOn(ray, hit, lightDraws, nearDraws, leaves, nearRays)
                                                      : readVoxels(ray, hit, lightDraws, leaves);
                     if (hit.t < nearField) ++nearHits;
+                    if (rotation) turn(L, vec3(0.0f));
+                    ++slot;
                     sum += L;
                     const double l = (double(L.x) + double(L.y) + double(L.z)) / 3.0;
                     squares += l * l;
@@ -311,6 +345,7 @@ std::vector<vec3> gatherFans(const std::vector<FanStart>& fans, const MipView& m
                     open += skyImageDrawsIrradiance(scene, bvh, fans[q].origin, fans[q].frame.normal, fans[q].frame.normal,
                                                     skyDrawsPerAxis, rays, fans[q].seed);
                 extras->sky[q] = isFinite(open) ? open : vec3(0.0f);
+                if (rotation) extras->rotation[q] = turned;
             }
         }
         nearHitCount += nearHits;

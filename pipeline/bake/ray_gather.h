@@ -85,6 +85,22 @@ struct FanStart {
     vec2 jitter{-1.0f};  // ≥ 0: its rays at this point of their strata (fan_rays.h fanDirectionJittered); else the fixed fan
 };
 
+// How a fan's irradiance (RGB) changes as its normal turns, from the same rays (Ward and
+// Heckbert 1992's rotation gradient): E(n + ν) ≈ E + G ν for a small change ν of the normal
+// in the fan's tangent plane; column j of G is ∂E/∂n_j (world axes). Turning the normal by ν
+// changes E = ∫ L cos θ dω by ∫ L (ν·ω) dω, each stratum's π/n² share times ν · its mean of
+// ω_t / cos θ (fanTurnWeights). `light` is of the light the rays read, `sky` of the sky the
+// rays that leave see (a uniform sky's or the image's radiance along them).
+struct RotationGradients {
+    glm::mat3 light{0.0f}, sky{0.0f};
+};
+
+// Per stratum of an n × n fan (ray k = i·n + j, fan_rays.h), the mean over it of d / cos θ, d
+// its points on the cosine-weighted disk, in the fan's frame (tangent, bitangent). The mean,
+// not its ray's direction: 1/cos θ grows without bound towards the horizon, and the outer
+// ring's mean direction gave a rotation gradient 16% too small (tests/bake/ray_gather_test.cpp).
+std::vector<vec2> fanTurnWeights(int n);
+
 // What a fan's rays found besides the light they read: the sky's irradiance through the rays
 // that left the scene (a uniform sky's radiance on their π/n² each; under an image sky each
 // ray's share against skyDrawsPerAxis² draws from the image, and those draws:
@@ -104,11 +120,14 @@ struct FanExtras {
     // same rule, at most kNearFieldBounces deep, then from the voxels. Needs `faces` to hold
     // all the light but the lights' (no bright patches split off).
     float nearField = 0.0f;
+    // Set by the caller: also each fan's rotation gradients (RotationGradients).
+    bool rotationGradients = false;
     // Rays of the fans that went on at a near hit, and the further rays they traced.
     uint64_t nearHits = 0, nearRays = 0;
     std::vector<vec3> sky;
     std::vector<float> variance;
     std::vector<uint32_t> escaped;
+    std::vector<RotationGradients> rotation;  // with rotationGradients
 };
 
 // gatherByRays from fans given directly (a lightmap texel's, bake/texel_gather.h); `extras`,

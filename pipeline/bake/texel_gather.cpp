@@ -36,7 +36,18 @@ struct Record {
     vec3 indirect{0.0f};  // E
     vec3 sky{0.0f};       // E
     float variance = 0.0f;  // of the mean channel of indirect + sky
+    RotationGradients rotation;  // of indirect (less the bright patches') and sky; zero without them
 };
+
+// A record's light turned to a sample's normal by its rotation gradients (ray_gather.h): a
+// record's neighbours on a curved cushion or a moulding face a little away from it, and see
+// more or less of what lies round them. Never below zero.
+vec3 indirectAt(const Record& r, const vec3& normal) {
+    return glm::max(r.indirect + r.rotation.light * (normal - r.sample.normal), vec3(0.0f));
+}
+vec3 skyAt(const Record& r, const vec3& normal) {
+    return glm::max(r.sky + r.rotation.sky * (normal - r.sample.normal), vec3(0.0f));
+}
 
 // The sample of a texel that stands for it as a record: the one with the largest share.
 const SurfaceSample* mainSample(const SurfaceSampleSet& set, size_t texel) {
@@ -103,6 +114,7 @@ void gatherRecords(std::vector<Record>& records, size_t first, int width, const 
     extras.readSky = settings.gatherSky;
     extras.lightsAtHits = settings.lightsAtHits;
     extras.nearField = settings.nearField;
+    extras.rotationGradients = settings.gradients;
     const std::vector<vec3> gathered =
         gatherFans(fans, mips, faces, bvh, scene, settings.raysPerAxis, nullptr, &extras, settings.skyDrawsPerAxis);
     tbb::parallel_for(size_t(0), count, [&](size_t k) {
@@ -114,6 +126,7 @@ void gatherRecords(std::vector<Record>& records, size_t first, int width, const 
                                                           settings.brightSamples, r.seed, &brightVariance);
         r.sky = extras.sky[k];
         r.variance = extras.variance[k] + brightVariance;
+        if (settings.gradients) r.rotation = extras.rotation[k];
     });
 }
 
@@ -183,6 +196,7 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
         constexpr float kernel[3] = {3.0f / 8.0f, 1.0f / 4.0f, 1.0f / 16.0f};
         std::vector<vec3> indirect(latticeRecords), sky(latticeRecords);
         std::vector<float> variance(latticeRecords);
+        std::vector<RotationGradients> rotation(settings.gradients ? latticeRecords : 0);
         tbb::parallel_for(jBegin, jEnd, [&](int j) {
             for (int i = 0; i < columns; ++i) {
                 const int32_t p = nodeAt(i, j);
@@ -192,12 +206,14 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
                     indirect[size_t(p)] = rp.indirect;
                     sky[size_t(p)] = rp.sky;
                     variance[size_t(p)] = rp.variance;
+                    if (settings.gradients) rotation[size_t(p)] = rp.rotation;
                     continue;
                 }
                 const float lp = meanOf(rp.indirect + rp.sky);
                 const float stop = kNoiseStops * std::sqrt(std::max(rp.variance, 0.0f)) + 1e-6f * (lp + 1e-6f);
                 vec3 sumIndirect(0.0f), sumSky(0.0f);
                 float total = 0.0f, sumVariance = 0.0f;
+                RotationGradients sumRotation;
                 for (int dj = -2; dj <= 2; ++dj)
                     for (int di = -2; di <= 2; ++di) {
                         const int32_t q = nodeAt(i + di * step, j + dj * step);
@@ -218,16 +234,20 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
                         sumSky += w * rq.sky;
                         sumVariance += w * w * rq.variance;
                         total += w;
+                        sumRotation.light += w * rq.rotation.light;
+                        sumRotation.sky += w * rq.rotation.sky;
                     }
                 indirect[size_t(p)] = sumIndirect / total;
                 sky[size_t(p)] = sumSky / total;
                 variance[size_t(p)] = sumVariance / (total * total);
+                if (settings.gradients) rotation[size_t(p)] = {sumRotation.light / total, sumRotation.sky / total};
             }
         });
         for (size_t k = 0; k < latticeRecords; ++k) {
             records[k].indirect = indirect[k];
             records[k].sky = sky[k];
             records[k].variance = variance[k];
+            if (settings.gradients) records[k].rotation = rotation[k];
         }
     }
 
@@ -315,8 +335,9 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
                     float total = 0.0f;
                     for (int c = 0; c < 4; ++c)
                         if (a.weight[c] > 0.0f) {
-                            Ei += a.weight[c] * records[size_t(a.slot[c])].indirect;
-                            Es += a.weight[c] * records[size_t(a.slot[c])].sky;
+                            const Record& r = records[size_t(a.slot[c])];
+                            Ei += a.weight[c] * indirectAt(r, sample.normal);
+                            Es += a.weight[c] * skyAt(r, sample.normal);
                             total += a.weight[c];
                         }
                     Ei /= total;
@@ -328,8 +349,9 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
                     const auto& uses = blockUse[b];
                     const auto use = std::lower_bound(uses.begin(), uses.end(), std::make_pair(k, uint32_t(0)));
                     if (use != uses.end() && use->first == k) {
-                        Ei = records[blockFirst[b] + use->second].indirect;
-                        Es = records[blockFirst[b] + use->second].sky;
+                        const Record& r = records[blockFirst[b] + use->second];
+                        Ei = indirectAt(r, sample.normal);
+                        Es = skyAt(r, sample.normal);
                     }
                 }
                 indirect += sample.weight * Ei;

@@ -9,8 +9,10 @@
 // records on one surface (near in space, facing one way, in one plane) whose difference the
 // records' own noise explains are averaged; a difference beyond it, or another surface, stops
 // the filter. Each texel sample then takes the lattice's records around it that lie on its own
-// surface, bilinearly; a sample no record applies to (a chart narrower than the lattice, a
-// corner) shares a record of its own with the samples of its s × s block on its surface.
+// surface, bilinearly, each record's light turned to the sample's normal by its rotation
+// gradient (bake/ray_gather.h RotationGradients); a sample no record applies to (a chart
+// narrower than the lattice, a corner) shares a record of its own with the samples of its
+// s × s block on its surface.
 //
 // Why not the voxel gather points (cone/irradiance_cache.h): a point stands for one side of a
 // 4³-voxel cell, so two surfaces facing one way within 20 cm of each other (a sofa's arm and its
@@ -41,6 +43,9 @@ struct TexelGatherSettings {
     DirectLightSettings direct;  // the direct light that tells a record is open (lights, emitters: no sky)
     const std::vector<FaceRadiance>* lightsAtHits = nullptr;  // hit-light exact (bake/ray_gather.h FanExtras)
     float nearField = 0.0f;  // world units: hits nearer than it traced on, not read (bake/ray_gather.h FanExtras)
+    // Each sample takes its records' light turned to its own normal by their rotation
+    // gradients (bake/ray_gather.h RotationGradients, smoothed by the filter as their light is).
+    bool gradients = true;
 };
 
 struct TexelGather {

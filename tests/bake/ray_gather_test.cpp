@@ -401,3 +401,81 @@ TEST_CASE("A gather fan's rays are unit, in the hemisphere, and stand for the co
         if (n >= 7) CHECK(meanCosine == Approx(2.0 / 3.0).epsilon(n >= 14 ? 0.005 : 0.02));
     }
 }
+
+namespace {
+
+// A black wall in the plane x = 0, `height` high and 400 m long, under a uniform sky L, with
+// no floor (rays below the horizon see the sky).
+struct WallFans {
+    Traced t;
+    VoxelScene voxels;
+    RadianceMips mips;
+};
+
+WallFans blackWall(float height, const vec3& L) {
+    Scene scene;
+    scene.sourcePath = "wall (test)";
+    scene.sky.radiance = L;
+    const int black = addLambert(scene, vec3(0.0f));
+    addQuad(scene, "wall", black, {0.0f, -200.0f, 0.0f}, {0.0f, -200.0f, height}, {0.0f, 200.0f, height},
+            {0.0f, 200.0f, 0.0f});
+    WallFans w{traced(scene), voxels(scene, 0.05), {}};
+    w.voxels.faceRadiance.assign(w.voxels.size(), FaceRadiance{});
+    w.voxels.radiance.assign(w.voxels.size(), vec3(0.0f));
+    w.mips = buildRadianceMips(w.voxels, w.voxels.radiance, w.voxels.faceRadiance);
+    return w;
+}
+
+// `count` jittered fans at one point, each its own jitter and turn.
+std::vector<FanStart> fansAt(const vec3& at, const vec3& normal, size_t count) {
+    std::vector<FanStart> fans;
+    vec3 tangent, bitangent;
+    orthonormalBasis(normal, tangent, bitangent);
+    for (size_t k = 0; k < count; ++k) {
+        FanStart fan;
+        fan.origin = at;
+        fan.frame = fanFrame(normal, tangent, float(k) * 0.618034f - std::floor(float(k) * 0.618034f));
+        fan.seed = k;
+        fan.jitter = vec2((float(k) + 0.5f) / float(count), float(k) * 0.754878f - std::floor(float(k) * 0.754878f));
+        fans.push_back(fan);
+    }
+    return fans;
+}
+
+}  // namespace
+
+TEST_CASE("A fan's rotation gradient is the change of its irradiance as its normal turns", "[bake]") {
+    // A point 0.3 m from the wall's foot, its normal up: turning the normal by α towards the
+    // wall (+X) changes E by α times the rotation gradient's X column. The reference is E
+    // itself gathered about normals turned by ±α (a central difference), 64 fans each; E
+    // upright must first hold the analytic view factor: the wall fills F = ½ (1 − h / √(h² +
+    // H²)) of the point's cosine-weighted sky, E = π L (1 − F). Strata weighted by their mean
+    // direction instead of their mean of ω_t / cos θ gave 16% too little.
+    const float H = 1.0f, h = 0.3f, alpha = 0.05f;
+    const vec3 L(1.0f, 0.5f, 0.25f);
+    const WallFans wall = blackWall(H, L);
+    const vec3 at(-h, 0.0f, 0.0f);
+    const auto gathered = [&](float turn, vec3* rotationX) {
+        const std::vector<FanStart> fans = fansAt(at, vec3(std::sin(turn), 0.0f, std::cos(turn)), 64);
+        FanExtras extras;
+        extras.rotationGradients = true;
+        gatherFans(fans, wall.mips.view(), wall.voxels.faceRadiance, wall.t.bvh.view(), wall.t.scene.view(), 16, nullptr,
+                   &extras);
+        vec3 sky(0.0f), dn(0.0f);
+        for (size_t q = 0; q < fans.size(); ++q) {
+            sky += extras.sky[q] / float(fans.size());
+            dn += extras.rotation[q].sky[0] / float(fans.size());
+            CHECK(extras.rotation[q].light == glm::mat3(0.0f));  // the wall reads black
+        }
+        if (rotationX) *rotationX = dn;
+        return sky;
+    };
+    vec3 rotation(0.0f);
+    const vec3 upright = gathered(0.0f, &rotation);
+    const float F = 0.5f * (1.0f - h / std::sqrt(h * h + H * H));
+    for (int c = 0; c < 3; ++c) CHECK(upright[c] == Approx(kPi * L[c] * (1.0f - F)).epsilon(0.01));
+    const vec3 difference = (gathered(alpha, nullptr) - gathered(-alpha, nullptr)) / (2.0f * alpha);
+    INFO("dE/dα " << rotation.x << " against the central difference " << difference.x);
+    CHECK(difference.x < -0.1f);  // turning towards the black wall darkens
+    for (int c = 0; c < 3; ++c) CHECK(rotation[c] == Approx(difference[c]).epsilon(0.05));
+}
