@@ -1,0 +1,187 @@
+// How well the voxels hold a scene's whole light, bounces and sky included: the light each
+// voxel side reflects after the bake's voxel stages (faceRadiance · π, over the side's
+// surface area) against the path tracer's (albedo × its irradiance, direct and indirect, at
+// points spread over the surface inside that side, area-weighted), by material. Where a
+// material's ratio is far from 1 after bounces and near 1 in accuracy_voxel_light (direct
+// light alone), the voxels' bounces are what carries too little or too much; every ray a
+// record or a near-field path reads from the voxels reads it. An accuracy measurement, not a
+// test and not a speed figure.
+//
+//   build/accuracy/accuracy_voxel_bounces JOB.json|SCENE.gltf [--points-per-voxel N] [--spp N] [name=value …]
+#include "accuracy_job.h"
+#include "bake/bake.h"
+#include "core/diagnostics.h"
+#include "core/error.h"
+#include "core/rng.h"
+#include "core/sampling.h"
+#include "trace/path_tracer.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+using namespace vl;
+
+namespace {
+
+struct CoordHash {
+    size_t operator()(const ivec3& c) const {
+        return size_t(uint32_t(c.x)) * 73856093u ^ size_t(uint32_t(c.y)) * 19349663u ^ size_t(uint32_t(c.z)) * 83492791u;
+    }
+};
+
+double mean3(const glm::dvec3& v) { return (v.x + v.y + v.z) / 3.0; }
+
+// A point on a voxel side: which voxel, which of its faces, the area it stands for.
+struct SidePoint {
+    uint32_t voxel = 0;
+    int face = 0;
+    double area = 0.0;
+    int material = -1;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        if (argc < 2)
+            throw SettingsError("usage: accuracy_voxel_bounces JOB.json|SCENE.gltf [--points-per-voxel N] [--spp N] [name=value …]");
+        int pointsPerVoxel = 4, spp = 32;
+        SettingAssignments assignments;
+        for (int i = 2; i < argc; ++i) {
+            const std::string arg = argv[i];
+            if (arg == "--points-per-voxel" && i + 1 < argc) {
+                pointsPerVoxel = std::max(1, std::stoi(argv[++i]));
+                continue;
+            }
+            if (arg == "--spp" && i + 1 < argc) {
+                spp = std::max(1, std::stoi(argv[++i]));
+                continue;
+            }
+            const size_t eq = arg.find('=');
+            if (eq == std::string::npos) throw SettingsError("not name=value: " + arg);
+            assignments.emplace_back(arg.substr(0, eq), arg.substr(eq + 1));
+        }
+        BakeJob job = accuracyJob(argv[1], assignments);
+        job.settings.quiet = true;
+        Scene scene = loadJobScene(job);
+        Diagnostics diagnostics(false, false);
+        const VoxelStages stages = bakeVoxelStages(scene, job.settings, diagnostics);
+        const VoxelScene& voxels = stages.result.voxels;
+        const double h = voxels.voxelSize;
+        const TraceSceneView view = stages.tracing->traceScene.view();
+        std::fprintf(stderr, "%zu voxels of %.2f cm\n", voxels.size(), 100.0 * h);
+
+        std::unordered_map<ivec3, uint32_t, CoordHash> index;
+        for (size_t i = 0; i < voxels.size(); ++i) index[voxels.coords[i]] = uint32_t(i);
+        // Points per triangle ∝ its area, on each side a voxel side faces; each to the side of its
+        // voxel whose normal is nearest its own.
+        SurfaceSampleSet set;
+        std::vector<SidePoint> points;
+        const double perArea = double(pointsPerVoxel) / (h * h);
+        for (uint32_t t = 0; t < view.triangleCount; ++t) {
+            const float area = triangleArea(view, t);
+            if (!(area > 0.0f)) continue;
+            const int n = std::max(1, int(std::lround(area * perArea)));
+            for (int k = 0; k < n; ++k) {
+                Pcg32 rng = Pcg32::forItem(t, uint64_t(k), 0xB0CEu);
+                const vec2 b = sampleUniformTriangle(vec2(rng.next1D(), rng.next1D()));
+                const SurfaceHit hit = surfaceAt(view, t, b.x, b.y);
+                const auto it = index.find(ivec3(glm::floor(hit.position / float(h) + vec3(0.5f))));
+                if (it == index.end()) continue;
+                const uint32_t v = it->second;
+                const VoxelSides sides = voxelSides(voxels.normal[v], voxels.axisWeights[v].data());
+                const bool doubleSided = view.materials[view.materialIds[t]].doubleSided;
+                for (float sign : {1.0f, -1.0f}) {
+                    if (sign < 0.0f && !doubleSided) continue;
+                    const vec3 side = sign * hit.geometricNormal;
+                    int best = -1;
+                    float bestDot = 0.0f;
+                    for (int s = 0; s < sides.count; ++s) {
+                        const float d = glm::dot(sides.normal[s], side);
+                        if (d > bestDot) best = s, bestDot = d;
+                    }
+                    if (best < 0) continue;
+                    int face = -1;
+                    for (int f = 0; f < 6; ++f)
+                        if (sides.sideOfFace[f] == best) face = f;
+                    if (face < 0) continue;
+                    SurfaceSample sample;
+                    sample.position = hit.position;
+                    sample.normal = sign * (glm::dot(hit.shadingNormal, hit.geometricNormal) >= 0.0f ? hit.shadingNormal
+                                                                                                       : -hit.shadingNormal);
+                    sample.albedo = baseColorAt(view, hit);
+                    sample.triangle = t;
+                    sample.weight = 1.0f;
+                    set.samples.push_back(sample);
+                    points.push_back({v, face, double(area) / n, int(view.materialIds[t])});
+                }
+            }
+        }
+        set.width = int(set.samples.size());
+        set.height = 1;
+        for (size_t k = 0; k <= set.samples.size(); ++k) set.begin.push_back(uint32_t(k));
+        std::fprintf(stderr, "%zu surface points, %d paths each\n", set.samples.size(), spp);
+        PathTracerSettings trace;
+        trace.samplesPerPixel = spp;
+        trace.quiet = true;
+        const TraceResult traced = traceIrradiance(stages.tracing->traceScene, stages.tracing->bvh, set, trace);
+
+        // Per voxel face: its area, ρ Σ E a by the path tracer; then per material (the face's
+        // largest), the voxels' reflected power L·π·area against the path tracer's.
+        struct FaceSum {
+            double area = 0.0;
+            glm::dvec3 exact{0.0}, direct{0.0};
+            std::map<int, double> materialArea;
+        };
+        std::unordered_map<uint64_t, FaceSum> faces;
+        for (size_t k = 0; k < points.size(); ++k) {
+            const SidePoint& p = points[k];
+            FaceSum& sum = faces[uint64_t(p.voxel) * 6 + uint64_t(p.face)];
+            const glm::dvec3 albedo(set.samples[k].albedo);
+            sum.area += p.area;
+            sum.exact += p.area * albedo * glm::dvec3(traced.beauty.rgb(int(k), 0)) * double(kPi);
+            sum.direct += p.area * albedo * glm::dvec3(traced.direct.rgb(int(k), 0)) * double(kPi);
+            sum.materialArea[p.material] += p.area;
+        }
+        struct Totals {
+            glm::dvec3 voxel{0.0}, exact{0.0}, direct{0.0};
+            double area = 0.0;
+        };
+        std::map<int, Totals> byMaterial;
+        Totals all;
+        std::vector<uint64_t> keys;
+        for (const auto& [key, sum] : faces) keys.push_back(key);
+        std::sort(keys.begin(), keys.end());  // the same sums in the same order every run
+        for (uint64_t key : keys) {
+            const FaceSum& sum = faces[key];
+            const glm::dvec3 L(voxels.faceRadiance[size_t(key / 6)][size_t(key % 6)]);
+            int material = -1;
+            double most = 0.0;
+            for (const auto& [m, a] : sum.materialArea)
+                if (a > most) material = m, most = a;
+            for (Totals* t : {&byMaterial[material], &all}) {
+                t->voxel += L * double(kPi) * sum.area;
+                t->exact += sum.exact;
+                t->direct += sum.direct;
+                t->area += sum.area;
+            }
+        }
+        std::printf("%-28s %10s %12s %12s %12s %8s\n", "material", "area m²", "voxels W", "traced W", "of it direct",
+                    "ratio");
+        const auto row = [](const std::string& name, const Totals& t) {
+            std::printf("%-28s %10.3f %12.4f %12.4f %12.4f %8.3f\n", name.c_str(), t.area, mean3(t.voxel), mean3(t.exact),
+                        mean3(t.direct), mean3(t.exact) > 0.0 ? mean3(t.voxel) / mean3(t.exact) : 0.0);
+        };
+        for (const auto& [m, t] : byMaterial)
+            row(m >= 0 && size_t(m) < scene.materials.size() ? scene.materials[size_t(m)].name : "default", t);
+        row("all", all);
+        return 0;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return 1;
+    }
+}
