@@ -163,7 +163,7 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
              if (v != "tree" && v != "each") throw SettingsError("setting many-lights = '" + v + "' is not one of tree, each");
              s.lightTrees = v == "tree";
          }},
-        {"near-field", "a lightmap record's ray that hits a surface nearer than this many voxels traces the light there on, by a path of cosine rays, instead of reading the voxel, which a crease narrower than a voxel shares with the open surface beside it; 0: every hit reads its voxel (default 1)",
+        {"near-field", "a lightmap record's ray that hits a surface nearer than this many voxels traces the light there on, by a path of cosine rays, instead of reading the voxel, which a crease narrower than a voxel shares with the open surface beside it; 0: every hit reads its voxel (default 3)",
          [](S& s, const std::string& v) { s.nearFieldVoxels = static_cast<float>(parseRealSetting("near-field", v, 0, 64)); }},
         {"lightmap-gradients", "a lightmap's texels take their gather records' light turned to their own normal by the records' rotation gradients, seen by the records' own rays (Ward and Heckbert's): a curved cushion's or a moulding's texels face a little away from their records (default true)",
          [](S& s, const std::string& v) { s.lightmapGradients = parseBoolSetting("lightmap-gradients", v); }},

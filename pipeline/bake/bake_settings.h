@@ -133,7 +133,7 @@ struct BakeSettings {
     // near-field: a lightmap record's ray that hits a surface nearer than this many voxels
     // traces its light on instead of reading the voxel there (bake/ray_gather.h FanExtras);
     // 0: every hit reads its voxel. docs/accuracy.md.
-    float nearFieldVoxels = 1.0f;
+    float nearFieldVoxels = 3.0f;
     DirectLightSettings direct;
     // A uniform sky's radiance, W/(m²·sr) (scene.h Sky; glTF has none): zero, no sky.
     vec3 sky{0.0f};

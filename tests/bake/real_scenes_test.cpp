@@ -56,7 +56,7 @@ TEST_CASE("The grey-white room's lightmap-lit view against Cycles: the transport
                                               sourceDir() + "/tests/reference/grey-white-room/grey_white_room_render_lambert_4096spp.exr",
                                               "gwr-cycles");
     INFO("lightmap-lit view " << e.relativeRmse);
-    CHECK(e.relativeRmse < 0.22);
+    CHECK(e.relativeRmse < 0.20);
     for (int c = 0; c < 3; ++c) CHECK(e.meanTest[c] == Approx(e.meanReference[c]).epsilon(0.02));
 }
 
