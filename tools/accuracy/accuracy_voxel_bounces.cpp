@@ -12,9 +12,8 @@
 #include "bake/bake.h"
 #include "core/diagnostics.h"
 #include "core/error.h"
-#include "core/rng.h"
-#include "core/sampling.h"
 #include "trace/path_tracer.h"
+#include "voxel_side_points.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -26,12 +25,6 @@
 using namespace vl;
 
 namespace {
-
-struct CoordHash {
-    size_t operator()(const ivec3& c) const {
-        return size_t(uint32_t(c.x)) * 73856093u ^ size_t(uint32_t(c.y)) * 19349663u ^ size_t(uint32_t(c.z)) * 83492791u;
-    }
-};
 
 double mean3(const glm::dvec3& v) { return (v.x + v.y + v.z) / 3.0; }
 
@@ -75,52 +68,18 @@ int main(int argc, char** argv) {
         const TraceSceneView view = stages.tracing->traceScene.view();
         std::fprintf(stderr, "%zu voxels of %.2f cm\n", voxels.size(), 100.0 * h);
 
-        std::unordered_map<ivec3, uint32_t, CoordHash> index;
-        for (size_t i = 0; i < voxels.size(); ++i) index[voxels.coords[i]] = uint32_t(i);
-        // Points per triangle ∝ its area, on each side a voxel side faces; each to the side of its
-        // voxel whose normal is nearest its own.
+        // Points per triangle ∝ its area, each to the side of its voxel that faces its way.
         SurfaceSampleSet set;
         std::vector<SidePoint> points;
-        const double perArea = double(pointsPerVoxel) / (h * h);
-        for (uint32_t t = 0; t < view.triangleCount; ++t) {
-            const float area = triangleArea(view, t);
-            if (!(area > 0.0f)) continue;
-            const int n = std::max(1, int(std::lround(area * perArea)));
-            for (int k = 0; k < n; ++k) {
-                Pcg32 rng = Pcg32::forItem(t, uint64_t(k), 0xB0CEu);
-                const vec2 b = sampleUniformTriangle(vec2(rng.next1D(), rng.next1D()));
-                const SurfaceHit hit = surfaceAt(view, t, b.x, b.y);
-                const auto it = index.find(ivec3(glm::floor(hit.position / float(h) + vec3(0.5f))));
-                if (it == index.end()) continue;
-                const uint32_t v = it->second;
-                const VoxelSides sides = voxelSides(voxels.normal[v], voxels.axisWeights[v].data());
-                const bool doubleSided = view.materials[view.materialIds[t]].doubleSided;
-                for (float sign : {1.0f, -1.0f}) {
-                    if (sign < 0.0f && !doubleSided) continue;
-                    const vec3 side = sign * hit.geometricNormal;
-                    int best = -1;
-                    float bestDot = 0.0f;
-                    for (int s = 0; s < sides.count; ++s) {
-                        const float d = glm::dot(sides.normal[s], side);
-                        if (d > bestDot) best = s, bestDot = d;
-                    }
-                    if (best < 0) continue;
-                    int face = -1;
-                    for (int f = 0; f < 6; ++f)
-                        if (sides.sideOfFace[f] == best) face = f;
-                    if (face < 0) continue;
-                    SurfaceSample sample;
-                    sample.position = hit.position;
-                    sample.normal = sign * (glm::dot(hit.shadingNormal, hit.geometricNormal) >= 0.0f ? hit.shadingNormal
-                                                                                                       : -hit.shadingNormal);
-                    sample.albedo = baseColorAt(view, hit);
-                    sample.triangle = t;
-                    sample.weight = 1.0f;
-                    set.samples.push_back(sample);
-                    points.push_back({v, face, double(area) / n, int(view.materialIds[t])});
-                }
-            }
-        }
+        forEachVoxelSidePoint(voxels, view, pointsPerVoxel, 0xB0CEu, [&](const VoxelSidePoint& p) {
+            const VoxelSides sides = voxelSides(voxels.normal[p.voxel], voxels.axisWeights[p.voxel].data());
+            int face = -1;
+            for (int f = 0; f < 6; ++f)
+                if (sides.sideOfFace[f] == p.side) face = f;
+            if (face < 0) return;
+            set.samples.push_back(p.sample);
+            points.push_back({p.voxel, face, p.area, int(view.materialIds[p.sample.triangle])});
+        });
         set.width = int(set.samples.size());
         set.height = 1;
         for (size_t k = 0; k <= set.samples.size(); ++k) set.begin.push_back(uint32_t(k));

@@ -24,23 +24,17 @@
 #include "lighting/surface_light.h"
 #include "scene/own_frame.h"
 #include "voxel/voxelize.h"
+#include "voxel_side_points.h"
 
 #include <algorithm>
 #include <cstdio>
 #include <map>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 using namespace vl;
 
 namespace {
-
-struct CoordHash {
-    size_t operator()(const ivec3& c) const {
-        return size_t(uint32_t(c.x)) * 73856093u ^ size_t(uint32_t(c.y)) * 19349663u ^ size_t(uint32_t(c.z)) * 83492791u;
-    }
-};
 
 struct SideSum {
     double area = 0.0;
@@ -93,55 +87,18 @@ int main(int argc, char** argv) {
         else
             lightVoxels(scene, voxels, settings.lighting);
 
-        std::unordered_map<ivec3, uint32_t, CoordHash> index;
-        for (size_t i = 0; i < voxels.size(); ++i) index[voxels.coords[i]] = uint32_t(i);
         // Points per triangle ∝ its area: pointsPerVoxel per h² of surface, at least one.
         std::vector<SideSum> sums(voxels.size() * 6);
-        const size_t triangles = tracing.triangles.meshIndex.size();
         uint64_t samples = 0;
-        const double perArea = double(pointsPerVoxel) / (h * h);
-        for (uint32_t t = 0; t < triangles; ++t) {
-            const float area = triangleArea(view, t);
-            if (!(area > 0.0f)) continue;
-            const int n = std::max(1, int(std::lround(area * perArea)));
-            for (int k = 0; k < n; ++k) {
-                Pcg32 rng = Pcg32::forItem(t, uint64_t(k), 0xACCu);
-                const vec2 b = sampleUniformTriangle(vec2(rng.next1D(), rng.next1D()));
-                const SurfaceHit hit = surfaceAt(view, t, b.x, b.y);
-                const ivec3 c(glm::floor(hit.position / float(h) + vec3(0.5f)));
-                const auto it = index.find(c);
-                if (it == index.end()) continue;
-                const uint32_t v = it->second;
-                const VoxelSides sides = voxelSides(voxels.normal[v], voxels.axisWeights[v].data());
-                const bool doubleSided = view.materials[view.materialIds[t]].doubleSided;
-                const vec3 ng = hit.geometricNormal;
-                for (float sign : {1.0f, -1.0f}) {
-                    if (sign < 0.0f && !doubleSided) continue;
-                    const vec3 side = sign * ng;
-                    // The side whose normal is nearest n.
-                    int best = -1;
-                    float bestDot = 0.0f;
-                    for (int s = 0; s < sides.count; ++s) {
-                        const float d = glm::dot(sides.normal[s], side);
-                        if (d > bestDot) best = s, bestDot = d;
-                    }
-                    if (best < 0) continue;
-                    SurfaceSample sample;
-                    sample.position = hit.position;
-                    sample.normal = sign * (glm::dot(hit.shadingNormal, ng) >= 0.0f ? hit.shadingNormal : -hit.shadingNormal);
-                    sample.albedo = baseColorAt(view, hit);
-                    sample.triangle = t;
-                    const vec3 E = directIrradiance(view, bvh, sample, settings.direct, uint64_t(t) * 131u + uint64_t(k));
-                    SideSum& sum = sums[size_t(v) * 6 + size_t(best)];
-                    const double a = double(area) / n;
-                    sum.area += a;
-                    sum.exact += a * glm::dvec3(E);
-                    sum.albedo += a * glm::dvec3(sample.albedo);
-                    sum.materialArea[int(view.materialIds[t])] += a;
-                    ++samples;
-                }
-            }
-        }
+        forEachVoxelSidePoint(voxels, view, pointsPerVoxel, 0xACCu, [&](const VoxelSidePoint& p) {
+            const vec3 E = directIrradiance(view, bvh, p.sample, settings.direct, p.draw);
+            SideSum& sum = sums[size_t(p.voxel) * 6 + size_t(p.side)];
+            sum.area += p.area;
+            sum.exact += p.area * glm::dvec3(E);
+            sum.albedo += p.area * glm::dvec3(p.sample.albedo);
+            sum.materialArea[int(view.materialIds[p.sample.triangle])] += p.area;
+            ++samples;
+        });
         std::fprintf(stderr, "%llu surface points\n", static_cast<unsigned long long>(samples));
 
         // Per material: reflected power by the voxels (ρ_voxel/π·E_voxel·π = ρ E over the side's
