@@ -97,8 +97,8 @@ struct RotationGradients {
 
 // Per stratum of an n × n fan (ray k = i·n + j, fan_rays.h), the mean over it of d / cos θ, d
 // its points on the cosine-weighted disk, in the fan's frame (tangent, bitangent). The mean,
-// not its ray's direction: 1/cos θ grows without bound towards the horizon, and the outer
-// ring's mean direction gave a rotation gradient 16% too small (tests/bake/ray_gather_test.cpp).
+// not its ray's direction: 1/cos θ grows without bound towards the horizon, so the outer ring's
+// mean direction undercounts it (tests/bake/ray_gather_test.cpp, docs/accuracy.md).
 std::vector<vec2> fanTurnWeights(int n);
 
 // What a fan's rays found besides the light they read: the sky's irradiance through the rays

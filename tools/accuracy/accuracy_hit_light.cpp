@@ -53,9 +53,7 @@ int main(int argc, char** argv) {
             } else if (arg == "--rays" && i + 1 < argc) {
                 raysPerAxis = std::max(1, int(std::lround(std::sqrt(std::stod(argv[++i])))));
             } else {
-                const size_t eq = arg.find('=');
-                if (eq == std::string::npos) throw SettingsError("not name=value: " + arg);
-                assignments.emplace_back(arg.substr(0, eq), arg.substr(eq + 1));
+                addAssignment(assignments, arg);
             }
         }
         if (pixels.empty()) throw SettingsError("--pixel: name at least one pixel");

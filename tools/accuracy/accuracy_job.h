@@ -29,6 +29,13 @@ inline BakeJob accuracyJob(const std::string& input, const SettingAssignments& a
     return job;
 }
 
+// A command line's name=value setting onto `assignments`; SettingsError naming the argument otherwise.
+inline void addAssignment(SettingAssignments& assignments, const std::string& arg) {
+    const size_t eq = arg.find('=');
+    if (eq == std::string::npos) throw SettingsError("not name=value: " + arg);
+    assignments.emplace_back(arg.substr(0, eq), arg.substr(eq + 1));
+}
+
 // "X,Y" after a flag such as --pixel; SettingsError naming the flag otherwise.
 inline std::pair<int, int> parsePoint(const std::string& flag, const char* text) {
     int x = 0, y = 0;

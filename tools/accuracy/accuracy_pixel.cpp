@@ -105,9 +105,7 @@ int main(int argc, char** argv) {
             } else if (arg == "--spp" && i + 1 < argc) {
                 spp = std::max(1, std::stoi(argv[++i]));
             } else {
-                const size_t eq = arg.find('=');
-                if (eq == std::string::npos) throw SettingsError("not name=value: " + arg);
-                assignments.emplace_back(arg.substr(0, eq), arg.substr(eq + 1));
+                addAssignment(assignments, arg);
             }
         }
         if (pixels.empty() && texels.empty() && classesPath.empty() && truthLightmapPath.empty())

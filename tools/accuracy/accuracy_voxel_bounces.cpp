@@ -54,9 +54,7 @@ int main(int argc, char** argv) {
                 spp = std::max(1, std::stoi(argv[++i]));
                 continue;
             }
-            const size_t eq = arg.find('=');
-            if (eq == std::string::npos) throw SettingsError("not name=value: " + arg);
-            assignments.emplace_back(arg.substr(0, eq), arg.substr(eq + 1));
+            addAssignment(assignments, arg);
         }
         BakeJob job = accuracyJob(argv[1], assignments);
         job.settings.quiet = true;
