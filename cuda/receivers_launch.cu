@@ -41,6 +41,7 @@ ReceiverLighting shadeReceiversCuda(const SurfaceSampleSet& receivers, const Tra
     ReceiverLighting out;
     for (Image* image : {&out.direct, &out.indirect, &out.directRadiance, &out.indirectRadiance})
         *image = Image(receivers.width, receivers.height, 3);
+    if (mayBeBuried) out.open = Image(receivers.width, receivers.height, 1);
     if (elements == 0) return out;
 
     DeviceBuffers buffers;
@@ -66,6 +67,7 @@ ReceiverLighting shadeReceiversCuda(const SurfaceSampleSet& receivers, const Tra
         out.indirect.setRgb(x, y, host[e].indirect);
         out.directRadiance.setRgb(x, y, host[e].directRadiance);
         out.indirectRadiance.setRgb(x, y, host[e].indirectRadiance);
+        if (mayBeBuried) out.open.at(x, y) = host[e].openWeight;
     }
     return out;
 }

@@ -470,6 +470,8 @@ ReceiverLighting ReceiverShading::shadeAtlasRows(const LightmapAtlas& given, int
                 const size_t element = k / 3;
                 if (element < first || element >= last) image->pixels[k] = 0.0f;
             }
+        for (size_t element = 0; element < lit.open.pixels.size(); ++element)
+            if (element < first || element >= last) lit.open.pixels[element] = 0.0f;
     } else if (texelGather()) {
         // Lights and emitters per sample; the sky and the indirect light from the atlas's own
         // records (bake/texel_gather.h). An image sky's sun casts shadows as sharp as a light's,
@@ -499,6 +501,7 @@ ReceiverLighting ReceiverShading::shadeAtlasRows(const LightmapAtlas& given, int
                                                        bright_, tracing_.bvh.view(), tracing_.traceScene.view(), texels);
         for (size_t k = 0; k < lit.direct.pixels.size(); ++k) lit.direct.pixels[k] += gathered.sky.pixels[k];
         lit.indirect = gathered.indirect;
+        lit.open = gathered.open;
         return lit;  // a lightmap's reflected light (directRadiance, indirectRadiance) is not read
     } else {
         lit = shadeReceivers(receivers, tracing_.traceScene.view(), tracing_.bvh.view(), &mipView_, gathered_,
@@ -524,14 +527,34 @@ BakedImage ReceiverShading::shadeCamera(const Camera& camera) const {
             lit.directRadiance, lit.indirectRadiance, receivers.albedo, Image()};
 }
 
-BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, const Image& indirect, const Scene& scene,
-                             const BakeSettings& settings) {
-    BakedLightmap baked{atlas.name, sumRgb(direct, indirect), direct, indirect, atlas.mask, atlas.coveredTexels,
-                        atlas.meshes, {}};
-    // Padding texels take their covered neighbours' values, so bilinear filtering at chart
-    // edges does not bleed black.
-    for (Image* image : {&baked.total, &baked.direct, &baked.indirect}) dilatePadding(*image, atlas.mask);
-    baked.seams = finishLightmapSeams(scene, atlas.meshes, atlas.mask, baked.direct, baked.indirect, baked.total,
+BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, const Image& indirect, const Image& open,
+                             const Scene& scene, const BakeSettings& settings) {
+    BakedLightmap baked{atlas.name, Image(), direct, indirect, atlas.mask, atlas.coveredTexels, 0, atlas.meshes, {}};
+    if (!open.pixels.empty()) {
+        const SurfaceSampleSet& set = atlas.receivers;
+        if (open.width != set.width || open.height != set.height)
+            throw Error("finishLightmap: the open samples' weights are not the atlas's size");
+        for (size_t texel = 0; texel < set.elementCount(); ++texel) {
+            if (set.sampleCount(texel) == 0) continue;
+            float weight = 0.0f;  // summed as the shading sums its open samples' weights
+            for (uint32_t k = set.begin[texel]; k < set.begin[texel + 1]; ++k) weight += set.samples[k].weight;
+            const float shown = open.pixels[texel];
+            if (!(shown < weight)) continue;
+            const float scale = shown > 0.0f ? weight / shown : 0.0f;
+            for (int c = 0; c < 3; ++c) {
+                baked.direct.pixels[3 * texel + size_t(c)] *= scale;
+                baked.indirect.pixels[3 * texel + size_t(c)] *= scale;
+            }
+            if (shown > 0.0f) continue;
+            baked.mask.pixels[texel] = 0.0f;
+            ++baked.buriedTexels;
+        }
+    }
+    baked.total = sumRgb(baked.direct, baked.indirect);
+    // Padding texels (and buried ones) take their neighbours' values, so bilinear filtering at
+    // chart edges does not bleed black.
+    for (Image* image : {&baked.total, &baked.direct, &baked.indirect}) dilatePadding(*image, baked.mask);
+    baked.seams = finishLightmapSeams(scene, atlas.meshes, baked.mask, baked.direct, baked.indirect, baked.total,
                                       settings.lightmapStitch);
     return baked;
 }
@@ -561,7 +584,7 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
         timed(result.stages, "lightmaps", [&] {
             for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics)) {
                 const ReceiverLighting lit = shading.shadeAtlasRows(atlas, 0, atlas.receivers.height);
-                result.lightmaps.push_back(finishLightmap(atlas, lit.direct, lit.indirect, scene, settings));
+                result.lightmaps.push_back(finishLightmap(atlas, lit.direct, lit.indirect, lit.open, scene, settings));
             }
             return 0;
         });

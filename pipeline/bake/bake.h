@@ -45,8 +45,9 @@ struct BakedLightmap {
     Image total;       // RGB E/π, padding dilated
     Image direct;
     Image indirect;
-    Image mask;        // 1 channel: 1 covered, 0 padding
+    Image mask;        // 1 channel: 1 where a texel holds its own light; 0 padding, and buried texels
     size_t coveredTexels = 0;
+    size_t buriedTexels = 0;       // covered, but wholly inside closed geometry: filled as padding
     std::vector<uint32_t> meshes;  // indices into Scene::meshes baked into it
     LightmapSeamReport seams;      // its chart seams' jumps, before and after stitching
 };
@@ -159,10 +160,13 @@ private:
 
 // An atlas's finished images from its receivers' direct and indirect light: the total, and
 // padding texels dilated from their covered neighbours in all three; then its chart seams
-// (bake/lightmap_seams.h) measured and, with settings.lightmapStitch, stitched. `scene`: the
-// one the atlas was built from (its TEXCOORD_1).
-BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, const Image& indirect, const Scene& scene,
-                             const BakeSettings& settings);
+// (bake/lightmap_seams.h) measured and, with settings.lightmapStitch, stitched. `open`
+// (ReceiverLighting::open, may be empty): a texel partly inside closed geometry holds the light
+// of its open samples alone, and one wholly inside is filled as padding is, so that bilinear
+// filtering beside it (a wall at a panel's foot) does not pull in black. `scene`: the one the
+// atlas was built from (its TEXCOORD_1).
+BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, const Image& indirect, const Image& open,
+                             const Scene& scene, const BakeSettings& settings);
 
 // Whether a bake with these settings renders its cameras' lightmap-lit images: it asks for
 // them and bakes both lightmaps and images.

@@ -130,6 +130,7 @@ nlohmann::json reportJson(const BakeReport& report, const BakeSettings& settings
     }
     json["lightmap_texels"] = report.lightmapTexels;
     json["covered_texels"] = report.coveredTexels;
+    json["buried_texels"] = report.buriedTexels;
     json["pixels"] = report.pixels;
     json["peak_memory_bytes"] = report.peakMemoryBytes;
     for (const StageTime& s : report.stages) json["stage_seconds"][s.stage] = s.seconds;
@@ -255,6 +256,7 @@ void writeBakeFiles(const BakeJob& job, BakeResult& result, const ExportSource& 
     for (const BakedLightmap& lightmap : result.lightmaps) {
         report.lightmapTexels += lightmap.total.pixels.size() / 3;
         report.coveredTexels += lightmap.coveredTexels;
+        report.buriedTexels += lightmap.buriedTexels;
         const std::string stem = safeName(lightmap.name);
         files.exr(lightmap.total, stem + ".exr");
         files.exr(lightmap.direct, stem + "_direct.exr");

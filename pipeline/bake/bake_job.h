@@ -45,6 +45,7 @@ struct BakeReport {
     std::optional<LightmapUvReport> lightmapUvs;  // when the bake generated TEXCOORD_1
     size_t lightmapTexels = 0;
     size_t coveredTexels = 0;
+    size_t buriedTexels = 0;  // of them, wholly inside closed geometry: filled from their neighbours
     // The lightmaps' chart seams (bake/lightmap_seams.h), all atlases pooled; none without lightmaps.
     std::optional<LightmapSeamReport> lightmapSeams;
     size_t pixels = 0;

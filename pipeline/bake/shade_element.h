@@ -121,6 +121,7 @@ struct ElementLighting {
     vec3 indirect{0.0f};
     vec3 directRadiance{0.0f};
     vec3 indirectRadiance{0.0f};
+    float openWeight = 0.0f;  // of the samples not buried
 };
 
 // The irradiance at a surface point from n × n cosine-distributed rays (a gather point's fan,
@@ -195,13 +196,13 @@ VL_HOSTDEV inline ElementLighting shadeReceiverElement(const TraceSceneView& sce
     for (uint32_t i = first; i < last; ++i) {
         const SurfaceSample& r = samples[i];
         const vec3 ed = directIrradiance(scene, bvh, r, direct, i) * kInvPi;
-        const vec3 ei = mips && !(mayBeBuried && !(maxComponent(ed) > 0.0f) && isBuried(scene, bvh, r))
-                            ? indirectIrradiance(scene, bvh, *mips, cache, set, cone, r, i) * kInvPi
-                            : vec3(0.0f);
+        const bool buried = mips && mayBeBuried && !(maxComponent(ed) > 0.0f) && isBuried(scene, bvh, r);
+        const vec3 ei = mips && !buried ? indirectIrradiance(scene, bvh, *mips, cache, set, cone, r, i) * kInvPi : vec3(0.0f);
         out.direct += r.weight * ed;
         out.indirect += r.weight * ei;
         out.directRadiance += r.weight * r.albedo * ed;
         out.indirectRadiance += r.weight * r.albedo * ei;
+        if (!buried) out.openWeight += r.weight;
     }
     return out;
 }

@@ -17,6 +17,7 @@ ReceiverLighting shadeReceivers(const SurfaceSampleSet& receivers, const TraceSc
     ReceiverLighting out;
     for (Image* image : {&out.direct, &out.indirect, &out.directRadiance, &out.indirectRadiance})
         *image = Image(receivers.width, receivers.height, 3);
+    if (mayBeBuried) out.open = Image(receivers.width, receivers.height, 1);
     const ConeSet& set = coneSet(cone.coneCount);
     const size_t elements = std::min(receivers.elementCount(), lastElement);
     tbb::parallel_for(tbb::blocked_range<size_t>(std::min(firstElement, elements), elements, 64), [&](const tbb::blocked_range<size_t>& range) {
@@ -30,6 +31,7 @@ ReceiverLighting shadeReceivers(const SurfaceSampleSet& receivers, const TraceSc
             out.indirect.setRgb(x, y, lit.indirect);
             out.directRadiance.setRgb(x, y, lit.directRadiance);
             out.indirectRadiance.setRgb(x, y, lit.indirectRadiance);
+            if (mayBeBuried) out.open.at(x, y) = lit.openWeight;
         }
         if (progress) progress->advance(range.size());
     });

@@ -23,6 +23,9 @@ struct ReceiverLighting {
     Image indirect;          // RGB E_indirect/π
     Image directRadiance;    // RGB Σ w·albedo·E_direct/π (reflected light, for images)
     Image indirectRadiance;  // RGB Σ w·albedo·E_indirect/π
+    // Lightmap texels only (1 channel): the weight of the element's samples that are not buried
+    // (shade_element.h isBuried). Empty: every sample is open.
+    Image open;
 };
 
 // `mips` may be null (no indirect light: direct only). `cache`, when given, holds the

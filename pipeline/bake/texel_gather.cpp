@@ -147,6 +147,7 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
     TexelGather out;
     out.indirect = Image(W, H, 3);
     out.sky = Image(W, H, 3);
+    out.open = Image(W, H, 1);
     rowBegin = std::clamp(rowBegin, 0, H);
     rowEnd = std::clamp(rowEnd, rowBegin, H);
     if (rowBegin == rowEnd || mips.levelCount <= 0) return out;
@@ -289,7 +290,12 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
     const int blockBegin = rowBegin / s, blockEnd = (rowEnd + s - 1) / s;
     const int blocksAcross = (W + s - 1) / s;
     std::vector<std::vector<Record>> blockRecords(size_t(blockEnd - blockBegin) * size_t(blocksAcross));
-    std::vector<std::vector<std::pair<uint32_t, uint32_t>>> blockUse(blockRecords.size());  // (sample, its record)
+    struct BlockUse {
+        uint32_t sample;
+        uint32_t record;  // in the block's own records until they join `records`, then in `records`
+        size_t texel;
+    };
+    std::vector<std::vector<BlockUse>> blockUse(blockRecords.size());  // in sample order
     tbb::parallel_for(size_t(0), blockRecords.size(), [&](size_t b) {
         const int bx = int(b % size_t(blocksAcross)), by = blockBegin + int(b / size_t(blocksAcross));
         std::vector<Record>& own = blockRecords[b];
@@ -308,16 +314,48 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
                         r.seed = (uint64_t(1) << 40) | k;
                         own.push_back(r);
                     }
-                    blockUse[b].emplace_back(k, use);
+                    blockUse[b].push_back({k, use, texel});
                 }
             }
     });
-    std::vector<size_t> blockFirst(blockRecords.size(), 0);
     for (size_t b = 0; b < blockRecords.size(); ++b) {
-        blockFirst[b] = records.size();
+        const uint32_t first = uint32_t(records.size());
+        for (BlockUse& use : blockUse[b]) use.record += first;
         records.insert(records.end(), blockRecords[b].begin(), blockRecords[b].end());
     }
     gatherRecords(records, latticeRecords, W, mips, faces, bright, bvh, scene, settings);
+
+    // A block's record may be buried where some samples sharing it are not (a wall's texels
+    // beside the foot of a panel hung on it): those take records of their own, shared as before.
+    std::vector<std::vector<Record>> reopened(blockRecords.size());
+    std::vector<std::vector<std::pair<size_t, uint32_t>>> reopenedUse(blockRecords.size());  // (use, record)
+    tbb::parallel_for(size_t(0), blockRecords.size(), [&](size_t b) {
+        for (size_t u = 0; u < blockUse[b].size(); ++u) {
+            const BlockUse& use = blockUse[b][u];
+            if (!records[use.record].buried) continue;
+            const SurfaceSample& sample = set.samples[use.sample];
+            const bool lit = direct && maxComponent(direct->rgb(int(use.texel % size_t(W)), int(use.texel / size_t(W)))) > 0.0f;
+            if (!lit && isBuried(scene, bvh, sample)) continue;
+            std::vector<Record>& own = reopened[b];
+            uint32_t r = 0;
+            while (r < own.size() && !compatible(sample, own[r])) ++r;
+            if (r == own.size()) {
+                Record record;
+                record.sample = sample;
+                record.texel = use.texel;
+                record.seed = (uint64_t(2) << 40) | use.sample;
+                own.push_back(record);
+            }
+            reopenedUse[b].emplace_back(u, r);
+        }
+    });
+    const size_t firstReopened = records.size();
+    for (size_t b = 0; b < blockRecords.size(); ++b) {
+        const uint32_t first = uint32_t(records.size());
+        for (const auto& [u, r] : reopenedUse[b]) blockUse[b][u].record = first + r;
+        records.insert(records.end(), reopened[b].begin(), reopened[b].end());
+    }
+    if (records.size() > firstReopened) gatherRecords(records, firstReopened, W, mips, faces, bright, bvh, scene, settings);
 
     // Each sample: its lattice records, bilinearly, else its block's record.
     tbb::parallel_for(rowBegin, rowEnd, [&](int y) {
@@ -327,10 +365,12 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
             if (set.sampleCount(texel) == 0) continue;
             const size_t b = size_t(by) * size_t(blocksAcross) + size_t(x / s);
             vec3 indirect(0.0f), sky(0.0f);
+            float open = 0.0f;
             for (uint32_t k = set.begin[texel]; k < set.begin[texel + 1]; ++k) {
                 const SurfaceSample& sample = set.samples[k];
                 const Around a = around(x, y, sample);
                 vec3 Ei(0.0f), Es(0.0f);
+                bool buried = false;
                 if (anyWeight(a)) {
                     float total = 0.0f;
                     for (int c = 0; c < 4; ++c)
@@ -343,22 +383,27 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
                     Ei /= total;
                     Es /= total;
                     // Beside closed geometry (a floor at a block's foot) the sample may be inside it.
-                    if (a.buriedNear && !(direct && maxComponent(direct->rgb(x, y)) > 0.0f) && isBuried(scene, bvh, sample))
-                        Ei = Es = vec3(0.0f);
+                    buried = a.buriedNear && !(direct && maxComponent(direct->rgb(x, y)) > 0.0f) &&
+                             isBuried(scene, bvh, sample);
+                    if (buried) Ei = Es = vec3(0.0f);
                 } else {
                     const auto& uses = blockUse[b];
-                    const auto use = std::lower_bound(uses.begin(), uses.end(), std::make_pair(k, uint32_t(0)));
-                    if (use != uses.end() && use->first == k) {
-                        const Record& r = records[blockFirst[b] + use->second];
+                    const auto use = std::lower_bound(uses.begin(), uses.end(), k,
+                                                      [](const BlockUse& u, uint32_t sample) { return u.sample < sample; });
+                    if (use != uses.end() && use->sample == k) {
+                        const Record& r = records[use->record];
+                        buried = r.buried;
                         Ei = indirectAt(r, sample.normal);
                         Es = skyAt(r, sample.normal);
                     }
                 }
                 indirect += sample.weight * Ei;
                 sky += sample.weight * Es;
+                if (!buried) open += sample.weight;
             }
             out.indirect.setRgb(x, y, indirect * kInvPi);
             out.sky.setRgb(x, y, sky * kInvPi);
+            out.open.at(x, y) = open;
         }
     });
     return out;

@@ -12,7 +12,9 @@
 // surface, bilinearly, each record's light turned to the sample's normal by its rotation
 // gradient (bake/ray_gather.h RotationGradients); a sample no record applies to (a chart
 // narrower than the lattice, a corner) shares a record of its own with the samples of its
-// s × s block on its surface.
+// s × s block on its surface. A sample inside closed geometry (shade_element.h isBuried) takes
+// no light: where a block's record is buried, the block's samples that are open take records of
+// their own.
 //
 // Why not the voxel gather points (cone/irradiance_cache.h): a point stands for one side of a
 // 4³-voxel cell, so two surfaces facing one way within 20 cm of each other (a sofa's arm and its
@@ -51,6 +53,7 @@ struct TexelGatherSettings {
 struct TexelGather {
     Image indirect;  // RGB E_indirect / π per covered texel (W/(m²·sr), the lightmap's convention)
     Image sky;       // RGB E_sky / π: the sky's direct light
+    Image open;      // 1 channel: the weight of each covered texel's samples that are not buried
 };
 
 // Covered texels of rows [rowBegin, rowEnd); other texels 0. A texel's value does not depend on

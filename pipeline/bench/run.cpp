@@ -52,10 +52,12 @@ Image imageMask(const Image& reference, float limit) {
     return mask;
 }
 
-BenchError compare(const Image& test, const Image& reference, const Image& mask, const std::string& testName) {
+BenchError compare(const Image& test, const Image& reference, const Image& mask, const std::string& testName,
+                   const Image* testMask = nullptr) {
     BenchError e;
     MetricOptions options;
     options.mask = &mask;
+    options.testMask = testMask;
     options.testName = testName;
     e.metrics = compareImages(test, reference, options);
     e.available = true;
@@ -68,11 +70,17 @@ struct Comparer {
 
     // Fills the point's errors from whichever of its outputs exist on disk.
     void fromFiles(BenchPointResult& p, const fs::path& dir, const std::string& lightmapStem, const std::string& imageStem) const {
+        // A lightmap is rated over the texels it holds its own light in (its _mask.exr): not those
+        // inside closed geometry, which it fills from their neighbours and a reference bake
+        // holds black.
+        const fs::path ownMaskFile = dir / (lightmapStem + "_mask.exr");
+        const Image ownMask = !lightmapStem.empty() && fs::exists(ownMaskFile) ? readImage(ownMaskFile.string()) : Image();
         auto check = [&](const std::string& stem, const std::string& suffix, const Image& reference, const Image& mask,
                          BenchError& out) {
             const fs::path file = dir / (stem + suffix);
             if (stem.empty() || !fs::exists(file)) return;
-            out = compare(readImage(file.string()), reference, mask, file.string());
+            const bool lightmap = stem == lightmapStem && !ownMask.empty();
+            out = compare(readImage(file.string()), reference, mask, file.string(), lightmap ? &ownMask : nullptr);
         };
         if (ref.hasLightmap) check(lightmapStem, ".exr", ref.lightmap, ref.mask, p.lightmap);
         if (ref.hasLightmapIndirect) check(lightmapStem, "_indirect.exr", ref.lightmapIndirect, ref.mask, p.lightmapIndirect);

@@ -272,6 +272,7 @@ UnitRecord runReceiverUnit(const BakeJob& job, const std::string& sceneWork, con
                            {"row_end", rowEnd}};
             file.add(rows(lit.direct, rowBegin, rowEnd));
             file.add(rows(lit.indirect, rowBegin, rowEnd));
+            file.add(lit.open.pixels.empty() ? std::vector<float>() : rows(lit.open, rowBegin, rowEnd));
             writeUnitFile(file, (dir / kBandFile).string());
         } else {
             const std::vector<Camera> cameras = bakeCameras(scene, settings);
@@ -334,6 +335,8 @@ BakeReport mergeScene(const BakeJob& job, const std::string& sceneWork, const Sc
                 const LightmapAtlas& atlas = atlases[a];
                 Image direct(atlas.receivers.width, atlas.receivers.height, 3);
                 Image indirect = direct;
+                Image open(atlas.receivers.width, atlas.receivers.height, 1);
+                bool anyOpen = false;  // the bands say which of their samples are buried
                 for (int band = 0; band < units.atlases[a].bands; ++band, ++receiver) {
                     const std::string path = (fs::path(sceneWork) / receiverFolder(units, receiver) / kBandFile).string();
                     const UnitFile file = readUnitFile(path);
@@ -345,13 +348,17 @@ BakeReport mergeScene(const BakeJob& job, const std::string& sceneWork, const Sc
                                          " of the scene's atlas '" + atlas.name + "'");
                     const size_t offset = size_t(rowBegin) * size_t(atlas.receivers.width) * 3;
                     const size_t floats = size_t(rowEnd - rowBegin) * size_t(atlas.receivers.width) * 3;
-                    const std::vector<float> d = file.take<float>(0, path), i = file.take<float>(1, path);
-                    if (d.size() != floats || i.size() != floats) throw InputError(path + ": a band of the wrong size");
+                    const std::vector<float> d = file.take<float>(0, path), i = file.take<float>(1, path),
+                                             o = file.take<float>(2, path);
+                    if (d.size() != floats || i.size() != floats || (!o.empty() && o.size() != floats / 3))
+                        throw InputError(path + ": a band of the wrong size");
                     std::copy(d.begin(), d.end(), direct.pixels.begin() + long(offset));
                     std::copy(i.begin(), i.end(), indirect.pixels.begin() + long(offset));
+                    std::copy(o.begin(), o.end(), open.pixels.begin() + long(offset / 3));
+                    anyOpen = anyOpen || !o.empty();
                     lightmapSeconds += records[size_t(receiver) + 1].seconds;
                 }
-                result.lightmaps.push_back(finishLightmap(atlas, direct, indirect, scene, job.settings));
+                result.lightmaps.push_back(finishLightmap(atlas, direct, indirect, anyOpen ? open : Image(), scene, job.settings));
             }
         }
         for (int c = 0; c < units.cameras; ++c) {

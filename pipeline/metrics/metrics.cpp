@@ -33,13 +33,15 @@ ErrorMetrics compareImages(const Image& test, const Image& reference, const Metr
     if (channels != std::min(test.channels, 3) || channels != std::min(reference.channels, 3))
         throw InputError(names + ": channel counts differ (" + std::to_string(test.channels) + " and " +
                          std::to_string(reference.channels) + ")");
-    if (options.mask && (options.mask->width != test.width || options.mask->height != test.height ||
-                         options.mask->channels < 1))
-        throw InputError(names + ": the mask is " + std::to_string(options.mask->width) + " x " +
-                         std::to_string(options.mask->height) + ", not the images' size");
+    for (const Image* mask : {options.mask, options.testMask})
+        if (mask && (mask->width != test.width || mask->height != test.height || mask->channels < 1))
+            throw InputError(names + ": the " + (mask == options.mask ? "mask" : options.testName + "'s mask") + " is " +
+                             std::to_string(mask->width) + " x " + std::to_string(mask->height) +
+                             ", not the images' size");
     checkFinite(test, options.testName);
     checkFinite(reference, options.referenceName);
     if (options.mask) checkFinite(*options.mask, "mask");
+    if (options.testMask) checkFinite(*options.testMask, options.testName + "'s mask");
 
     ErrorMetrics m;
     double sumSq = 0.0, sumRel = 0.0, sumSmape = 0.0, sumRef = 0.0;
@@ -47,6 +49,7 @@ ErrorMetrics compareImages(const Image& test, const Image& reference, const Metr
     for (int y = 0; y < test.height; ++y)
         for (int x = 0; x < test.width; ++x) {
             if (options.mask && !(options.mask->at(x, y, 0) > 0.5f)) continue;
+            if (options.testMask && !(options.testMask->at(x, y, 0) > 0.5f)) continue;
             if (options.excludeReferenceAbove > 0.0f) {
                 bool bright = false;
                 for (int c = 0; c < channels; ++c) bright = bright || reference.at(x, y, c) > options.excludeReferenceAbove;

@@ -15,6 +15,10 @@ namespace vl {
 
 struct MetricOptions {
     const Image* mask = nullptr;        // pixel included where channel 0 > 0.5; null = all
+    // And where this one's channel 0 > 0.5, when given: the test's own coverage (a bake's
+    // lightmap mask, which leaves out the texels inside closed geometry it fills from their
+    // neighbours, where a reference bake holds black).
+    const Image* testMask = nullptr;
     float excludeReferenceAbove = 0.0f;  // > 0: drop pixels with any reference channel above it
     double relMseEpsilon = 1e-2;        // relMSE = mean((t − r)² / (r² + ε))
     double smapeEpsilon = 1e-2;         // SMAPE = mean(|t − r| / (|t| + |r| + ε))

@@ -45,15 +45,15 @@ const BakedLightmap& lightmapNamed(const BakeResult& result, const std::string& 
 double coveredMean(const BakedLightmap& l, const Image* image = nullptr) {
     const Image& values = image ? *image : l.total;
     double sum = 0.0;
-    size_t n = 0;
     for (int y = 0; y < l.mask.height; ++y)
         for (int x = 0; x < l.mask.width; ++x)
             if (l.mask.at(x, y) > 0.5f) {
                 const vec3 v = values.rgb(x, y);
                 sum += (v.x + v.y + v.z) / 3.0;
-                ++n;
             }
-    return n ? sum / static_cast<double>(n) : 0.0;
+    // Buried texels (inside closed geometry: the ceiling over a lamp 1 cm under it) hold their
+    // neighbours' light for the bilinear reads beside them; what reaches them is nothing.
+    return l.coveredTexels ? sum / static_cast<double>(l.coveredTexels) : 0.0;
 }
 
 // A quick bake job of a scene file into `out` (emptied first): quiet, 32 voxels, the
@@ -120,8 +120,12 @@ TEST_CASE("The default bake of the Cycles Cornell boxes matches Cycles' lightmap
         for (size_t k = 0; k < referenceIndirect.pixels.size(); ++k)
             referenceIndirect.pixels[k] -= referenceDirect.pixels[k];
         const Image mask = readImage(cycles + "_lightmap_mask.exr");
+        // Over the texels both bakes hold their own light in: under the boxes Cycles holds
+        // black, and the bake fills those texels from their neighbours (counted, the quad box's
+        // lightmap is 14.9% from Cycles).
         MetricOptions options;
         options.mask = &mask;
+        options.testMask = &ours.mask;
         const ErrorMetrics total = compareImages(ours.total, reference, options);
         const ErrorMetrics direct = compareImages(ours.direct, referenceDirect, options);
         const ErrorMetrics indirect = compareImages(ours.indirect, referenceIndirect, options);

@@ -108,8 +108,12 @@ TEST_CASE("The open Cycles Cornell box under a uniform sky: the bake and the pat
     const BakeResult result = bake(scene, settings, diagnostics);
     REQUIRE(result.lightmaps.size() == 1);
     REQUIRE(result.images.size() == 1);
-    const ErrorMetrics total = compareImages(result.lightmaps[0].total, reference, options);
-    const ErrorMetrics indirect = compareImages(result.lightmaps[0].indirect, referenceIndirect, options);
+    // Over the texels the bake holds its own light in: Cycles holds black where the floor lies
+    // under the boxes, and the bake fills those texels from their neighbours.
+    MetricOptions baked = options;
+    baked.testMask = &result.lightmaps[0].mask;
+    const ErrorMetrics total = compareImages(result.lightmaps[0].total, reference, baked);
+    const ErrorMetrics indirect = compareImages(result.lightmaps[0].indirect, referenceIndirect, baked);
     const ErrorMetrics image = compareImages(result.images[0].beauty, referenceRender, MetricOptions{});
     INFO("bake: lightmap " << total.relativeRmse << ", indirect " << indirect.relativeRmse << ", image "
                            << image.relativeRmse);

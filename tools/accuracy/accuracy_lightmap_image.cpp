@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
         std::vector<ShippedLightmap> shipped, floats;
         for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics)) {
             const ReceiverLighting lit = shading.shadeAtlasRows(atlas, 0, atlas.receivers.height);
-            const BakedLightmap lightmap = finishLightmap(atlas, lit.direct, lit.indirect, scene, job.settings);
+            const BakedLightmap lightmap = finishLightmap(atlas, lit.direct, lit.indirect, lit.open, scene, job.settings);
             shipped.push_back({lightmap.meshes, shippedLightmapTexels(lightmap.total)});
             floats.push_back({lightmap.meshes, lightmap.total});
             std::printf("lightmap '%s': %d x %d, %zu covered texels, %zu meshes\n", lightmap.name.c_str(),

@@ -13,7 +13,8 @@
 // of it (normals over 45° apart, G), or padding or another mesh (B), and OUT_materials.exr the
 // material of each pixel's main sample: an error heat map split by cause (docs/accuracy.md).
 // --truth-lightmap OUT.exr writes the lightmap-lit view from lightmaps whose every texel the path
-// tracer lit (--spp paths a sample, --seed), dilated and stitched as the bake's: what the
+// tracer lit (--spp paths a sample, --seed; none from samples inside closed geometry, whose
+// texels are filled from their neighbours), dilated and stitched as the bake's: what the
 // atlas, its texels and the bilinear read alone cost against the truth (two seeds give their
 // noise), and beside it OUT_texels_<atlas>.exr, the truth's texels as shipped. With
 // --truth-texels T.exr[,T2.exr …] (one file an atlas, in the bake's order) those texels are
@@ -33,6 +34,8 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "trace/path_tracer.h"
+
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -130,7 +133,7 @@ int main(int argc, char** argv) {
         std::vector<int> atlasOf(scene.meshes.size(), -1);
         for (LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics)) {
             const ReceiverLighting lit = shading.shadeAtlasRows(atlas, 0, atlas.receivers.height);
-            const BakedLightmap lightmap = finishLightmap(atlas, lit.direct, lit.indirect, scene, job.settings);
+            const BakedLightmap lightmap = finishLightmap(atlas, lit.direct, lit.indirect, lit.open, scene, job.settings);
             if (job.settings.lightmapSide == LightmapSide::Inside)
                 orientLightmapSamples(atlas.receivers, tracing.bvh.view(), tracing.traceScene.view(), tracing.viewpoints);
             for (uint32_t m : lightmap.meshes)
@@ -275,8 +278,24 @@ int main(int argc, char** argv) {
                 traceSettings.samplesPerPixel = spp;
                 traceSettings.seed = seed;
                 traceSettings.quiet = true;
-                const TraceResult traced = traceIrradiance(tracing.traceScene, tracing.bvh, b.atlas.receivers, traceSettings);
-                const BakedLightmap truth = finishLightmap(b.atlas, traced.direct, traced.indirect, scene, job.settings);
+                // Samples inside closed geometry are nobody's truth (a path from there finds only
+                // what leaks through the cracks): they take no paths, and the lightmap is finished
+                // from the open ones as the bake's is (bake.h finishLightmap). The bake's rule: most
+                // probe rays meet backs, and neither a light nor the sky reaches it.
+                SurfaceSampleSet open = b.atlas.receivers;
+                tbb::parallel_for(size_t(0), open.samples.size(), [&](size_t k) {
+                    const TraceSceneView view = tracing.traceScene.view();
+                    if (isBuried(view, tracing.bvh.view(), open.samples[k]) &&
+                        !(maxComponent(directIrradiance(view, tracing.bvh.view(), open.samples[k], job.settings.direct, k)) > 0.0f))
+                        open.samples[k].weight = 0.0f;
+                });
+                Image openWeight(open.width, open.height, 1);
+                for (size_t texel = 0; texel < open.elementCount(); ++texel)
+                    for (uint32_t k = open.begin[texel]; k < open.begin[texel + 1]; ++k)
+                        if (open.samples[k].weight > 0.0f) openWeight.pixels[texel] += open.samples[k].weight;
+                const TraceResult traced = traceIrradiance(tracing.traceScene, tracing.bvh, open, traceSettings);
+                const BakedLightmap truth =
+                    finishLightmap(b.atlas, traced.direct, traced.indirect, openWeight, scene, job.settings);
                 truths.push_back({b.meshes, shippedLightmapTexels(truth.total)});
                 writeExr(truths.back().texels, stem + "_texels_" + b.atlas.name + ".exr");
             }

@@ -110,8 +110,10 @@ int main(int argc, char** argv) {
                 Diagnostics diagnostics(false, false);
                 const BakeResult result = bake(scene, settings, diagnostics);
                 const BakedLightmap& lightmap = result.lightmaps.at(0);
-                const ErrorMetrics t = compareImages(lightmap.total, total, options);
-                const ErrorMetrics i = compareImages(lightmap.indirect, indirect, options);
+                MetricOptions own = options;  // over the texels the bake holds its own light in
+                own.testMask = &lightmap.mask;
+                const ErrorMetrics t = compareImages(lightmap.total, total, own);
+                const ErrorMetrics i = compareImages(lightmap.indirect, indirect, own);
                 if (!writeDir.empty()) {
                     const std::string stem = writeDir + "/" + name + "_turn" + std::to_string(k);
                     writeExr(lightmap.total, stem + ".exr");

@@ -140,9 +140,9 @@ int main(int argc, char** argv) {
             plain.lightmapStitch = false;
             stitched.lightmapStitch = true;
             const auto t0 = std::chrono::steady_clock::now();
-            const BakedLightmap off = finishLightmap(atlas, lit.direct, lit.indirect, scene, plain);
+            const BakedLightmap off = finishLightmap(atlas, lit.direct, lit.indirect, lit.open, scene, plain);
             const auto t1 = std::chrono::steady_clock::now();
-            const BakedLightmap on = finishLightmap(atlas, lit.direct, lit.indirect, scene, stitched);
+            const BakedLightmap on = finishLightmap(atlas, lit.direct, lit.indirect, lit.open, scene, stitched);
             const auto t2 = std::chrono::steady_clock::now();
             finishSeconds += std::chrono::duration<double>(t1 - t0).count();
             stitchSeconds += std::chrono::duration<double>((t2 - t1) - (t1 - t0)).count();
