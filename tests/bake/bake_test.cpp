@@ -121,8 +121,7 @@ TEST_CASE("The default bake of the Cycles Cornell boxes matches Cycles' lightmap
             referenceIndirect.pixels[k] -= referenceDirect.pixels[k];
         const Image mask = readImage(cycles + "_lightmap_mask.exr");
         // Over the texels both bakes hold their own light in: under the boxes Cycles holds
-        // black, and the bake fills those texels from their neighbours (counted, the quad box's
-        // lightmap is 14.9% from Cycles).
+        // black, and the bake fills those texels from their neighbours (docs/accuracy.md).
         MetricOptions options;
         options.mask = &mask;
         options.testMask = &ours.mask;

@@ -170,8 +170,8 @@ TEST_CASE("A floor under a block: the texels under it hold their open neighbours
     // A texel whose samples all lie under the block is inside closed geometry: nobody sees it,
     // but the bilinear read at the block's foot reaches it. It must hold its open neighbours'
     // light, not black. The read at the +x face's foot lies a tenth of the way from the texel
-    // under the block to the open one: with black under the block it held 0.08 against the
-    // sky's 0.53 there. Both gathers: records on the texels, and the voxel gather points.
+    // under the block to the open one, so black under the block would hold it near a tenth of
+    // the sky there. Both gathers: records on the texels, and the voxel gather points.
     const LightmapGather gather = GENERATE(LightmapGather::Texels, LightmapGather::Points);
     const Scene scene = blockOnAFloor();
     BakeSettings settings = quietSettings();
