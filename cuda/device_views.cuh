@@ -3,7 +3,7 @@
 // type is returned with device pointers. `owner` keeps the copies alive.
 #pragma once
 
-#include "cone/irradiance_cache.h"
+#include "gather/irradiance_cache.h"
 #include "cone/radiance_mips.h"
 #include "cuda/device_memory.cuh"
 #include "lighting/lighting_kernels.h"

@@ -1,11 +1,9 @@
 // The GPU launchers of the kernels the CPU stages run: the same VL_HOSTDEV functions over
-// the same POD views, with every array the view points at copied to the device (NanoVDB
-// grids as one buffer each, BVH and TraceScene arrays, material and texture tables) and the
-// results copied back into the same host structures the CPU functions return. Free of CUDA
-// types: the CPU build includes it too, and there every launcher throws.
-//
-// Every launcher first asks probeDevice(); without a usable device it throws vl::Error
-// "CUDA: <reason>" (no crash without a driver). Pick the device with device_choice.h.
+// the same POD views, every array a view points at copied to the device (NanoVDB grids as one
+// buffer each, BVH and TraceScene arrays, material and texture tables) and the results copied
+// back into the host structures the CPU functions return. Free of CUDA types: the CPU build
+// includes it too, and there every launcher throws. Without a usable device (probeDevice())
+// a launcher throws vl::Error "CUDA: <reason>", never crashes; device_choice.h picks one.
 //
 // Agreement with the CPU (floating-point order, FMA contraction and the CUDA maths library
 // differ, so results are close, not equal; tests/cuda checks these on a GPU machine):
@@ -16,7 +14,8 @@
 //     image means per channel within 1 % + 4 standard errors.
 #pragma once
 
-#include "bake/shade_receivers.h"
+#include "gather/gather_device.h"
+#include "gather/shade_receivers.h"
 #include "lighting/lighting.h"
 #include "trace/path_tracer.h"
 
@@ -49,6 +48,10 @@ ReceiverLighting shadeReceiversCuda(const SurfaceSampleSet& receivers, const Tra
 // IrradianceCache::gather on the GPU: the cone-traced irradiance at every gather point.
 std::vector<vec3> gatherIrradianceCuda(const std::vector<GatherPoint>& points, const MipView& mips,
                                        const ConeSettings& cone, int turns);
+
+// The gather's kernels on the GPU (gather/gather_device.h): gatherIrradianceCuda and
+// shadeReceiversCuda. Its calls throw as theirs do without a usable device.
+const GatherDevice& gatherDevice();
 
 // renderCamera and traceIrradiance on the GPU; thread (x, y) = (blockIdx·blockDim +
 // threadIdx) per axis is pixel or texel (x, y) (ERRATA eq. 7–8).

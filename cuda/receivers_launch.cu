@@ -2,7 +2,7 @@
 // (exact direct light through the BVH, indirect light interpolated from the gather points or
 // by cones through the radiance mips), and the gather points' own cone gather.
 #include "cuda/device_views.cuh"
-#include "bake/shade_element.h"
+#include "gather/shade_element.h"
 #include "cuda/launchers.h"
 
 namespace vl::cuda {

@@ -3,7 +3,7 @@
 // ranges, active voxels), so tests/cuda checks them against the owning containers on the host.
 #pragma once
 
-#include "cone/irradiance_cache.h"
+#include "gather/irradiance_cache.h"
 #include "cone/radiance_mips.h"
 #include "lighting/lighting_kernels.h"
 #include "trace/bvh.h"

@@ -8,7 +8,7 @@ packages=(build-essential cmake ninja-build
   gnuplot-nox  # voxlight bench draws its plot with gnuplot; the optional Cycles peer needs blender
   nodejs  # runs the Khronos glTF validator (tools/gltf-validator) on every scene.glb in the tests
   chromium  # voxlight view --screenshot, and the test of the viewer page in a real browser
-  slurm-wlm munge iproute2 procps)  # the one-node Slurm cluster the cluster bake's tests start (tools/slurm/test-cluster.sh)
+  slurm-wlm munge iproute2 procps)  # the one-node Slurm cluster the cluster bake's tests start (tools/cluster/test-cluster.sh)
 # `tools/install-deps.sh sanitizers` (tools/sanitize.sh and tools/fuzz.sh call it; CI runs them):
 # clang with its sanitizer runtimes (libclang-rt-14-dev: clang alone does not pull them),
 # libFuzzer, and llvm-14's llvm-symbolizer (reports name functions, and tools/lsan.supp

@@ -1,24 +1,16 @@
 #include "bake/bake.h"
 
-#include "bake/bright_patches.h"
-#include "bake/dilate.h"
-#include "bake/lightmap_image.h"
-#include "bake/open_space.h"
-#include "bake/ray_gather.h"
-#include "bake/shade_receivers.h"
-#include "bake/texel_gather.h"
 #include "bake/voxel_size.h"
-#include "cone/bounces.h"
 #include "core/error.h"
 #include "core/memory.h"
 #include "core/progress.h"
 #include "cuda/launchers.h"
 #include "lighting/lighting.h"
 #include "lighting/surface_light.h"
+#include "lightmap/dilate.h"
+#include "lightmap/lightmap_image.h"
 #include "scene/own_frame.h"
-#include "trace/bvh.h"
 #include "trace/camera.h"
-#include "trace/trace_scene.h"
 #include "voxel/voxelize.h"
 
 #include <chrono>
@@ -31,8 +23,8 @@ namespace vl {
 namespace {
 
 // Directly seen emitters are sampled on an 8 × 8 grid per pixel (primary rays only): their
-// edges are the brightest contrast in an image (measured on the Cycles Cornell render: the
-// emitter's edge pixels held 99% of the squared error at 2 × 2).
+// edges are the brightest contrast in an image, and at the pixels' own 2 × 2 they held most of
+// its squared error (docs/decisions.md, "Camera images: the emitter's edge").
 constexpr int kEmissionSubsamples = 8;
 
 // The sky's rays per surface point of the voxel pass by rays (2 × 2): a voxel side holds about
@@ -66,20 +58,6 @@ std::string gib(double bytes) {
     char text[32];
     std::snprintf(text, sizeof text, "%.1f GiB", bytes / (1024.0 * 1024.0 * 1024.0));
     return text;
-}
-
-// Runs `work` as a named stage and records its wall time.
-template <typename F>
-auto timed(std::vector<StageTime>& stages, const std::string& name, F&& work) {
-    struct Record {
-        std::vector<StageTime>& stages;
-        const std::string& name;
-        std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
-        ~Record() {
-            stages.push_back({name, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()});
-        }
-    } record{stages, name};
-    return work();
 }
 
 Image sumRgb(const Image& a, const Image& b) {
@@ -126,19 +104,6 @@ void checkMemoryBudget(const Scene& scene, const BakeSettings& settings, double 
                             " is available: lower resolution, lightmap-res or the image size");
 }
 
-double stageSeconds(const std::vector<StageTime>& stages, const std::string& stage) {
-    double seconds = 0.0;
-    for (const StageTime& t : stages)
-        if (t.stage == stage) seconds += t.seconds;
-    return seconds;
-}
-
-double totalSeconds(const std::vector<StageTime>& stages) {
-    double seconds = 0.0;
-    for (const StageTime& t : stages) seconds += t.seconds;
-    return seconds;
-}
-
 // The name of the image of generated charts in a scene whose other meshes have their own
 // TEXCOORD_1: "lightmap_generated", or with a number where an atlas group has taken that.
 std::string generatedAtlasName(const LightmapSettings& settings) {
@@ -150,10 +115,6 @@ std::string generatedAtlasName(const LightmapSettings& settings) {
     for (int n = 2; taken(name); ++n) name = "lightmap_generated_" + std::to_string(n);
     return name;
 }
-
-ReceiverScene::ReceiverScene(const Scene& scene, bool lightTrees)
-    : triangles(gatherTriangles(scene)), bvh(Bvh::build(triangles)), traceScene(TraceScene::build(scene, triangles, lightTrees)),
-      viewpoints(cameraViewpoints(scene)) {}
 
 GeneratedUvs generateSharedAtlasUvs(Scene& scene, const BakeSettings& settings, double voxelSize, Diagnostics& diagnostics) {
     GeneratedUvs out;
@@ -268,18 +229,17 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
     const BvhView bvhView = stages.tracing->bvh.view();
     // Points on the voxels' surfaces: what the voxel pass by rays lights and the final gather's
     // bright patches send from.
-    const bool finalGather = settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images);
-    const bool punctualLights = sceneView.lightCount > 0;
-    const BrightPatchSettings brightPatches = gatherBrightPatches(settings, punctualLights);
-    const bool needPoints = settings.lighting.visibilityBy == VoxelVisibility::Rays ||
-                            (finalGather && brightPatches.factor > 0.0f);
+    const GatherInputs inputs = gatherInputs(settings);
+    const GatherScene gatherScene{bvhView, sceneView};
+    const bool needPoints =
+        inputs.voxelsLitByRays || gatherNeedsSurfacePoints(settings.gather, inputs, sceneView.lightCount > 0);
     const VoxelSurfacePoints surfacePoints = timed(result.stages, "surface points", [&] {
         return needPoints ? voxelSurfacePoints(result.voxels, sceneView, settings.lighting.surfacePoints)
                           : VoxelSurfacePoints{};
     });
     timed(result.stages, "voxel light", [&] {
         Progress progress("voxel light", result.voxels.size(), settings.quiet);
-        if (settings.lighting.visibilityBy == VoxelVisibility::Rays) {
+        if (inputs.voxelsLitByRays) {
             lightVoxelsByRays(result.voxels, surfacePoints, sceneView, bvhView, kVoxelSkyStrata, &progress);
             return 0;
         }
@@ -287,120 +247,11 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
         else lightVoxels(scene, result.voxels, settings.lighting, &progress);
         return 0;
     });
-    const bool gathers =
-        settings.bounces > 0 || (settings.gatherLevel >= 0 && (settings.outputs.lightmaps || settings.outputs.images));
-    const EnclosedProbe enclosed = enclosedSurfaceProbe(bvhView, sceneView);
-    RadianceMips bounced;          // the bounces' own mips, relit with their result (level 0 alone by rays)
-    IrradianceCache bouncePoints;  // and their gather points, probed here, linked over them
-    result.gatherVisibility = timed(result.stages, "visibility", [&] {
-        if (gathers) {
-            bouncePoints = IrradianceCache(result.voxels, settings.bounceGatherLevel, &enclosed);
-            return chooseGatherVisibility(settings.gatherVisibility, bouncePoints, bvhView, sceneView);
-        }
-        GatherVisibilityChoice none;
-        none.setBy = "nothing gathers (no bounces and no final gather)";
-        return none;
-    });
-    if (!settings.quiet && gathers) std::fprintf(stderr, "%s\n", describeGatherVisibility(result.gatherVisibility).c_str());
-    const bool byRays = result.gatherVisibility.visibility == GatherVisibility::Rays;
-    FaceTransport bounceTransport;  // the bounces' rays, traced once
-    const TransportBuilder bounceRays = [&](const std::vector<GatherPoint>& points,
-                                            const MipView& mips) -> const FaceTransport& {
-        bounceTransport = rayTransport(points, mips, result.voxels.size(), bvhView, sceneView, settings.bounceRays,
-                                       settings.direct.skyStrata);
-        return bounceTransport;
-    };
-
-    BounceSky sky;
-    sky.radiance = scene.sky.radiance;
-    sky.openness = [&](const std::vector<GatherPoint>& points) {
-        return skyOpenness(points, static_cast<float>(result.voxels.voxelSize), bvhView, sceneView, settings.bounceRays);
-    };
-    if (sceneView.sky.hasImage()) {
-        sky.irradiance = [&](const std::vector<GatherPoint>& points) {
-            return skyIrradianceAtPoints(points, static_cast<float>(result.voxels.voxelSize), bvhView, sceneView,
-                                         settings.direct.skyStrata);
-        };
-        sky.imageDraws = [&](const std::vector<GatherPoint>& points) {
-            return skyImageDrawsAtPoints(points, static_cast<float>(result.voxels.voxelSize), bvhView, sceneView,
-                                         settings.direct.skyStrata, settings.bounceRays);
-        };
-    }
-
-    timed(result.stages, "bounces", [&] {
-        Progress progress("bounces", uint64_t(settings.bounces) * result.voxels.size(), settings.quiet);
-        propagateBounces(result.voxels, bounceConeSettings(settings), settings.bounces, settings.bounceGatherLevel,
-                         settings.bounceTail ? BounceTail::Geometric : BounceTail::None, &progress, &bounced,
-                         &bouncePoints, byRays ? &bounceRays : nullptr,
-                         settings.lighting.visibilityBy == VoxelVisibility::Rays ? nullptr : &sky);
-        return 0;
-    });
-    const bool reusePoints = bounced.levelCount() > 0 && settings.bounceGatherLevel == settings.gatherLevel;
-    result.mips = timed(result.stages, "mips", [&] {
-        if (bounced.levelCount() > 0) return std::move(bounced);
-        return buildRadianceMipsFor(result.voxels, byRays ? MipReaders::RaysOnly : MipReaders::Cones);
-    });
-    const MipView mipView = result.mips.view();
-
-    // The final gather, once for every receiver of every output.
-    IrradianceCache& cache = stages.cache;
-    if (finalGather) {
-        timed(result.stages, "gather", [&] {
-            // The bright patches leave the light the gather reads (the rays read faces, the
-            // cones the mips), and come back after.
-            stages.bright = splitBrightPatches(result.voxels, surfacePoints, brightPatches);
-            if (takesLightsAtHits(settings, punctualLights))
-                stages.bright.lightsAtHits = punctualFaceRadiance(result.voxels, surfacePoints, sceneView, bvhView);
-            const BrightPatchSplit& split = stages.bright;
-            result.brightPatches = split.patches.size();
-            const bool relight = !split.patches.empty() && !byRays;
-            if (relight) result.mips.relight(result.voxels, split.restRadiance, split.restFaces);
-            if (reusePoints) {
-                cache = std::move(bouncePoints);
-            } else {
-                cache = IrradianceCache(result.voxels, settings.gatherLevel, &enclosed);
-                cache.link(mipView);
-            }
-            if (byRays) cache.setRaysPerAxis(settings.gatherRays);
-            Progress progress("gather", cache.points().size(), settings.quiet);
-            const std::vector<FaceRadiance>& light = split.patches.empty() ? result.voxels.faceRadiance : split.restFaces;
-            // The bounces' rays, when they are the final gather's (the same points and as
-            // many rays), are not traced again: their transport maps the cache's points first.
-            if (byRays && reusePoints && settings.bounceRays == settings.gatherRays) {
-                std::vector<vec3> irradiance = applyTransport(bounceTransport, light);
-                irradiance.resize(cache.points().size());
-                cache.setIrradiance(std::move(irradiance));
-                progress.advance(cache.points().size());
-            } else if (byRays)
-                cache.setIrradiance(
-                    gatherByRays(cache.points(), mipView, light, bvhView, sceneView, settings.gatherRays, &progress));
-            else if (onGpu)
-                cache.setIrradiance(
-                    cuda::gatherIrradianceCuda(cache.points(), mipView, settings.cone, settings.gatherTurns));
-            else
-                cache.gather(mipView, settings.cone, settings.gatherTurns, &progress);
-            if (!split.patches.empty()) {
-                std::vector<vec3> irradiance = cache.irradiance();
-                const float h = static_cast<float>(result.voxels.voxelSize);
-                std::vector<vec3> origins;  // where each point's gather starts
-                if (byRays) {
-                    origins = fanOrigins(cache.points(), h, bvhView, sceneView);
-                } else {
-                    origins.reserve(cache.points().size());  // the cones' apex
-                    for (const GatherPoint& point : cache.points())
-                        origins.push_back(coneApex(point.position, point.normal, settings.cone, h));
-                }
-                addBrightPatchIrradiance(cache.points(), origins, split, bvhView, settings.brightPatches.samples, irradiance);
-                cache.setIrradiance(std::move(irradiance));
-            }
-            if (relight) result.mips.relight(result.voxels, result.voxels.radiance, result.voxels.faceRadiance);
-            return 0;
-        });
-        result.gatherPoints = cache.points().size();
-    }
-    // Receivers with no gather points to interpolate (gather level −1) trace their own cones,
-    // through every level of the mips.
-    if (result.gatherPoints == 0) result.mips.addParentLevels();
+    stages.indirect = gatherIndirect(result.voxels, surfacePoints, gatherScene, settings.gather, inputs,
+                                     onGpu ? &cuda::gatherDevice() : nullptr, result.stages);
+    result.gatherVisibility = stages.indirect.visibility;
+    result.gatherPoints = stages.indirect.cache.points().size();
+    result.brightPatches = stages.indirect.bright.patches.size();
     return stages;
 }
 
@@ -435,94 +286,17 @@ Image bakeLightmapImage(const TraceScene& trace, const Bvh& bvh, const CameraMod
                                settings.lightmapImageSubsamples, scene, triangles, lightmaps);
 }
 
-ReceiverShading::ReceiverShading(const ReceiverScene& tracing, const RadianceMips& mips, const IrradianceCache& cache,
-                                 const BrightPatchSplit& bright, const BakeSettings& settings, bool onGpu)
-    : tracing_(tracing),
-      bright_(bright),
-      settings_(settings),
-      onGpu_(onGpu),
-      mipView_(mips.view()),
-      cacheView_(cache.view(mipView_)),
-      gathered_(settings.gatherLevel >= 0 ? &cacheView_ : nullptr) {}
-
-bool ReceiverShading::texelGather() const {
-    return settings_.lightmapGather == LightmapGather::Texels && !onGpu_ && gathered_ && gathered_->raysPerAxis > 0;
+ReceiverGather bakeReceiverGather(const ReceiverScene& tracing, const IndirectLight& light, const BakeSettings& settings,
+                                  bool onGpu) {
+    return ReceiverGather(tracing, light, settings.gather, settings.direct, settings.lightmapSide, settings.quiet,
+                          onGpu ? &cuda::gatherDevice() : nullptr);
 }
 
-ReceiverLighting ReceiverShading::shadeAtlasRows(const LightmapAtlas& given, int rowBegin, int rowEnd) const {
-    LightmapAtlas inside;
-    if (settings_.lightmapSide == LightmapSide::Inside) {
-        inside = given;
-        orientLightmapSamples(inside.receivers, tracing_.bvh.view(), tracing_.traceScene.view(), tracing_.viewpoints);
-    }
-    const LightmapAtlas& atlas = settings_.lightmapSide == LightmapSide::Inside ? inside : given;
-    const SurfaceSampleSet& receivers = atlas.receivers;
-    const size_t first = static_cast<size_t>(rowBegin) * static_cast<size_t>(receivers.width);
-    const size_t last = static_cast<size_t>(rowEnd) * static_cast<size_t>(receivers.width);
-    Progress progress("lightmap " + atlas.name, last - first, settings_.quiet);
-    ReceiverLighting lit;
-    if (onGpu_) {
-        // The GPU shades whole atlases; rows outside the band are cleared.
-        lit = cuda::shadeReceiversCuda(receivers, tracing_.traceScene.view(), tracing_.bvh.view(), &mipView_, gathered_,
-                                       settings_.cone, settings_.direct, true);
-        for (Image* image : {&lit.direct, &lit.indirect, &lit.directRadiance, &lit.indirectRadiance})
-            for (size_t k = 0; k < image->pixels.size(); ++k) {
-                const size_t element = k / 3;
-                if (element < first || element >= last) image->pixels[k] = 0.0f;
-            }
-        for (size_t element = 0; element < lit.open.pixels.size(); ++element)
-            if (element < first || element >= last) lit.open.pixels[element] = 0.0f;
-    } else if (texelGather()) {
-        // Lights and emitters per sample; the sky and the indirect light from the atlas's own
-        // records (bake/texel_gather.h). An image sky's sun casts shadows as sharp as a light's,
-        // which the records' lattice and filter would blur (the Cornell box under the afternoon
-        // sky, docs/accuracy.md): it stays per sample.
-        const bool skyInRecords = !tracing_.traceScene.view().sky.hasImage();
-        DirectLightSettings direct = settings_.direct;
-        direct.skyAtSamples = !skyInRecords;
-        lit = shadeReceivers(receivers, tracing_.traceScene.view(), tracing_.bvh.view(), nullptr, nullptr,
-                             settings_.cone, direct, true, &progress, first, last);
-        progress.finish();
-        TexelGatherSettings texels;
-        texels.spacing = settings_.texelGatherSpacing;
-        texels.raysPerAxis = settings_.gatherRays;
-        texels.brightSamples = settings_.brightPatches.samples;
-        texels.skyDrawsPerAxis = settings_.direct.skyStrata;
-        texels.filterPasses = settings_.lightmapFilterPasses;
-        texels.gradients = settings_.lightmapGradients;
-        texels.direct = direct;
-        texels.direct.skyAtSamples = false;
-        texels.gatherSky = skyInRecords;
-        if (!bright_.lightsAtHits.empty()) texels.lightsAtHits = &bright_.lightsAtHits;
-        // The near field traces a hit's light on from the full faces: not where bright patches
-        // took part of their light away (the gather itself needs the lights at hits).
-        if (bright_.patches.empty()) texels.nearField = settings_.nearFieldVoxels * mipView_.voxelSize;
-        const TexelGather gathered = gatherAtlasTexels(atlas, rowBegin, rowEnd, &lit.direct, mipView_, bright_.restFaces,
-                                                       bright_, tracing_.bvh.view(), tracing_.traceScene.view(), texels);
-        for (size_t k = 0; k < lit.direct.pixels.size(); ++k) lit.direct.pixels[k] += gathered.sky.pixels[k];
-        lit.indirect = gathered.indirect;
-        lit.open = gathered.open;
-        return lit;  // a lightmap's reflected light (directRadiance, indirectRadiance) is not read
-    } else {
-        lit = shadeReceivers(receivers, tracing_.traceScene.view(), tracing_.bvh.view(), &mipView_, gathered_,
-                             settings_.cone, settings_.direct, true, &progress, first, last);
-    }
-    progress.finish();
-    return lit;
-}
-
-BakedImage ReceiverShading::shadeCamera(const Camera& camera) const {
-    const CameraModel model = makeCameraModel(camera, settings_.imageWidth, settings_.imageHeight);
-    const CameraReceivers receivers = bakeCameraReceivers(tracing_.traceScene, tracing_.bvh, model, settings_);
-    Progress progress("image", receivers.receivers.elementCount(), settings_.quiet);
-    const TraceSceneView sceneView = tracing_.traceScene.view();
-    const BvhView bvhView = tracing_.bvh.view();
-    const ReceiverLighting lit =
-        onGpu_ ? cuda::shadeReceiversCuda(receivers.receivers, sceneView, bvhView, &mipView_, gathered_, settings_.cone,
-                                          settings_.direct, false)
-               : shadeReceivers(receivers.receivers, sceneView, bvhView, &mipView_, gathered_, settings_.cone,
-                                settings_.direct, false, &progress);
-    progress.finish();
+BakedImage bakeCameraImage(const ReceiverGather& gather, const ReceiverScene& tracing, const Camera& camera,
+                           const BakeSettings& settings) {
+    const CameraModel model = makeCameraModel(camera, settings.imageWidth, settings.imageHeight);
+    const CameraReceivers receivers = bakeCameraReceivers(tracing.traceScene, tracing.bvh, model, settings);
+    const ReceiverLighting lit = gather.cameraSamples(receivers.receivers);
     return {camera.name, sumRgb(sumRgb(receivers.emission, lit.directRadiance), lit.indirectRadiance),
             lit.directRadiance, lit.indirectRadiance, receivers.albedo, Image()};
 }
@@ -579,11 +353,11 @@ void addLightmapImages(const Scene& scene, const ReceiverScene& tracing, const B
 BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnostics) {
     VoxelStages stages = bakeVoxelStages(scene, settings, diagnostics);
     BakeResult& result = stages.result;
-    const ReceiverShading shading(*stages.tracing, result.mips, stages.cache, stages.bright, settings, stages.onGpu);
+    const ReceiverGather receivers = bakeReceiverGather(*stages.tracing, stages.indirect, settings, stages.onGpu);
     if (settings.outputs.lightmaps) {
         timed(result.stages, "lightmaps", [&] {
             for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics)) {
-                const ReceiverLighting lit = shading.shadeAtlasRows(atlas, 0, atlas.receivers.height);
+                const ReceiverLighting lit = receivers.atlasRows(atlas, 0, atlas.receivers.height);
                 result.lightmaps.push_back(finishLightmap(atlas, lit.direct, lit.indirect, lit.open, scene, settings));
             }
             return 0;
@@ -591,7 +365,8 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
     }
     if (settings.outputs.images) {
         timed(result.stages, "images", [&] {
-            for (const Camera& camera : bakeCameras(scene, settings)) result.images.push_back(shading.shadeCamera(camera));
+            for (const Camera& camera : bakeCameras(scene, settings))
+                result.images.push_back(bakeCameraImage(receivers, *stages.tracing, camera, settings));
             return 0;
         });
     }
@@ -600,6 +375,7 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
             addLightmapImages(scene, *stages.tracing, settings, result);
             return 0;
         });
+    result.mips = std::move(stages.indirect.mips);
     return std::move(result);
 }
 

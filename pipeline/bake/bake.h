@@ -1,26 +1,22 @@
 // The bake in memory: a Scene and BakeSettings in, lit voxels, radiance mips, lightmaps and
-// camera images out (DESIGN.md data flow).
+// camera images out (docs/DESIGN.md, "Data flow").
 //   voxelize → voxel direct light → bounces → radiance mips ─┐
-//   BVH → receivers (lightmap texels, camera pixels) ────────┴→ exact direct + cones
+//   BVH → receivers (lightmap texels, camera pixels) ────────┴→ exact direct + gathered indirect
 // bake_job.h wraps it with loading, checks and files.
 #pragma once
 
 #include "bake/bake_settings.h"
-#include "bake/bright_patches.h"
-#include "bake/lightmap_image.h"
-#include "bake/lightmap_seams.h"
-#include "bake/ray_gather.h"
-#include "bake/receivers.h"
-#include "bake/shade_receivers.h"
 #include "bake/voxel_size.h"
-#include "cone/irradiance_cache.h"
-#include "cone/radiance_mips.h"
 #include "core/diagnostics.h"
 #include "core/image.h"
-#include "scene/scene.h"
+#include "core/stage_time.h"
 #include "export/gltf_export.h"
-#include "trace/bvh.h"
-#include "trace/trace_scene.h"
+#include "gather/gather.h"
+#include "lightmap/lightmap_image.h"
+#include "lightmap/lightmap_seams.h"
+#include "receivers/receiver_scene.h"
+#include "receivers/receivers.h"
+#include "scene/scene.h"
 #include "unwrap/lightmap_uvs.h"
 #include "voxel/voxel_scene.h"
 
@@ -30,15 +26,6 @@
 #include <vector>
 
 namespace vl {
-
-struct StageTime {
-    std::string stage;
-    double seconds = 0.0;
-};
-
-// The seconds of the stages named `stage` (0 when there is none) and of all of them.
-double stageSeconds(const std::vector<StageTime>& stages, const std::string& stage);
-double totalSeconds(const std::vector<StageTime>& stages);
 
 struct BakedLightmap {
     std::string name;  // the atlas name ("lightmap" for the shared atlas)
@@ -58,7 +45,7 @@ struct BakedImage {
     Image direct;    // albedo·E_direct/π
     Image indirect;  // albedo·E_indirect/π
     Image albedo;
-    Image lightmapped;  // RGB radiance lit by the shipped lightmaps (bake/lightmap_image.h); empty: not made
+    Image lightmapped;  // RGB radiance lit by the shipped lightmaps (lightmap/lightmap_image.h); empty: not made
 };
 
 struct BakeResult {
@@ -69,8 +56,8 @@ struct BakeResult {
     std::vector<BakedImage> images;
     std::vector<StageTime> stages;
     size_t gatherPoints = 0;  // where the receivers' indirect light was gathered (0: at every sample)
-    size_t brightPatches = 0;  // gathered by shadow rays at the gather points (bake/bright_patches.h)
-    GatherVisibilityChoice gatherVisibility;  // rays or cones, and why (bake/ray_gather.h)
+    size_t brightPatches = 0;  // gathered by shadow rays at the gather points (gather/bright_patches.h)
+    GatherVisibilityChoice gatherVisibility;  // rays or cones, and why (gather/ray_gather.h)
     std::optional<LightmapUvReport> lightmapUvs;  // when the bake generated TEXCOORD_1 (unwrap/lightmap_uvs.h)
     std::vector<GeneratedLayout> generatedLayouts;  // then, per scene mesh: what glTF out writes
 };
@@ -79,16 +66,6 @@ struct BakeResult {
 // lightmap atlas, each camera), which read only what the voxel stages left. `bake` runs both
 // in one process; a cluster bake (cluster/units.h) runs them as separate units, and the
 // receivers of one atlas in bands of rows.
-
-// What receivers trace against: the scene's triangles, their BVH and materials.
-struct ReceiverScene {
-    SceneTriangles triangles;
-    Bvh bvh;
-    TraceScene traceScene;
-    std::vector<Viewpoint> viewpoints;  // the scene's own cameras: where people stand (bake/open_space.h)
-    // lightTrees: BakeSettings::lightTrees (trace_scene.h).
-    explicit ReceiverScene(const Scene& scene, bool lightTrees = true);
-};
 
 // Lightmap UVs for the shared atlas's meshes that have no TEXCOORD_1 (when the settings
 // generate them), written into `scene`, and the lightmap settings they leave: the shared atlas
@@ -104,10 +81,9 @@ struct GeneratedUvs {
 GeneratedUvs generateSharedAtlasUvs(Scene& scene, const BakeSettings& settings, double voxelSize, Diagnostics& diagnostics);
 
 struct VoxelStages {
-    BakeResult result;          // every field but lightmaps and images
+    BakeResult result;          // every field but mips, lightmaps and images
     LightmapSettings lightmap;  // the settings', with the atlas generated lightmap UVs need
-    IrradianceCache cache;      // the final gather; no points when gather-level < 0
-    BrightPatchSplit bright;    // the final gather's bright patches and the light its rays read
+    IndirectLight indirect;     // the bounced voxels' mips and final gather (gather/gather.h)
     bool onGpu = false;         // the device the settings resolved to
     std::unique_ptr<ReceiverScene> tracing;
 };
@@ -126,41 +102,24 @@ std::vector<Camera> bakeCameras(const Scene& scene, const BakeSettings& settings
 CameraReceivers bakeCameraReceivers(const TraceScene& scene, const Bvh& bvh, const CameraModel& camera,
                                     const BakeSettings& settings);
 
-// A camera's lightmap-lit image (bake/lightmap_image.h) from `lightmaps`: what is seen
+// A camera's lightmap-lit image (lightmap/lightmap_image.h) from `lightmaps`: what is seen
 // directly as in bakeCameraReceivers, settings.lightmapImageSubsamples² lightmap reads a pixel.
 Image bakeLightmapImage(const TraceScene& trace, const Bvh& bvh, const CameraModel& camera, const Scene& scene,
                         const SceneTriangles& triangles, const BakeSettings& settings,
                         const std::vector<ShippedLightmap>& lightmaps);
 
-// Receivers lit from the voxel stages' mips and gather.
-class ReceiverShading {
-public:
-    // `bright`: the final gather's split of the voxels' light (VoxelStages::bright), which
-    // lightmaps gathered in texel space read (bake/texel_gather.h).
-    ReceiverShading(const ReceiverScene& tracing, const RadianceMips& mips, const IrradianceCache& cache,
-                    const BrightPatchSplit& bright, const BakeSettings& settings, bool onGpu);
-    // Rows [rowBegin, rowEnd) of an atlas; the other rows stay 0. Each texel's value does not
-    // depend on which rows are shaded with it.
-    ReceiverLighting shadeAtlasRows(const LightmapAtlas& atlas, int rowBegin, int rowEnd) const;
-    BakedImage shadeCamera(const Camera& camera) const;
+// The receivers' gather (gather/gather.h ReceiverGather) that a bake's settings make, on the
+// device they resolved to. `tracing` and `light` are read, not copied: they must outlive it.
+ReceiverGather bakeReceiverGather(const ReceiverScene& tracing, const IndirectLight& light, const BakeSettings& settings,
+                                  bool onGpu);
 
-    // Lightmaps gather their indirect light in their own texel space (bake/texel_gather.h):
-    // the setting's choice, where the final gather went by rays on the CPU.
-    bool texelGather() const;
-
-private:
-    const ReceiverScene& tracing_;
-    const BrightPatchSplit& bright_;
-    const BakeSettings& settings_;
-    bool onGpu_;
-    MipView mipView_;
-    IrradianceCacheView cacheView_;
-    const IrradianceCacheView* gathered_;
-};
+// A camera's image as the bake renders it: its receivers (bakeCameraReceivers) lit by `gather`.
+BakedImage bakeCameraImage(const ReceiverGather& gather, const ReceiverScene& tracing, const Camera& camera,
+                           const BakeSettings& settings);
 
 // An atlas's finished images from its receivers' direct and indirect light: the total, and
 // padding texels dilated from their covered neighbours in all three; then its chart seams
-// (bake/lightmap_seams.h) measured and, with settings.lightmapStitch, stitched. `open`
+// (lightmap/lightmap_seams.h) measured and, with settings.lightmapStitch, stitched. `open`
 // (ReceiverLighting::open, may be empty): a texel partly inside closed geometry holds the light
 // of its open samples alone, and one wholly inside is filled as padding is, so that bilinear
 // filtering beside it (a wall at a panel's foot) does not pull in black. `scene`: the one the
@@ -172,7 +131,7 @@ BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, co
 // them and bakes both lightmaps and images.
 bool makesLightmapImages(const BakeSettings& settings);
 
-// Each camera image's lightmap-lit twin (bake/lightmap_image.h) into result.images[c].lightmapped,
+// Each camera image's lightmap-lit twin (lightmap/lightmap_image.h) into result.images[c].lightmapped,
 // from result.lightmaps as they ship; the cameras are bakeCameras(scene, settings), the order
 // of result.images. A local bake and a cluster bake's merge both call this.
 void addLightmapImages(const Scene& scene, const ReceiverScene& tracing, const BakeSettings& settings,

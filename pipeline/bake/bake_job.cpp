@@ -45,10 +45,9 @@ std::string safeName(const std::string& name) {
     return out.empty() ? "unnamed" : out;
 }
 
-// The bake's files, written side by side once all are listed (EXR compression takes a
-// core per file): the write stage of `build/voxlight bake ../shared/reference/cornell_quad.gltf`
-// went from 0.30 to 0.20 s (bake.json, same bytes), most of what is left grids.vdb. Listed in
-// the report in the order they were added.
+// The bake's files, written side by side once all are listed (EXR compression takes a core
+// per file; the same bytes as one by one: docs/decisions.md, "Files written side by side").
+// Listed in the report in the order they were added.
 class StagedFiles {
 public:
     StagedFiles(const fs::path& dir, BakeReport& report) : dir_(dir), report_(report) {}
@@ -115,7 +114,7 @@ nlohmann::json reportJson(const BakeReport& report, const BakeSettings& settings
     }
     if (report.lightmapSeams) {
         // Measured on the total as scene.glb carries it, half a texel inside each chart and on
-        // the edge itself (bake/lightmap_seams.h).
+        // the edge itself (lightmap/lightmap_seams.h).
         const LightmapSeamReport& seams = *report.lightmapSeams;
         json["lightmap_seams"] = {{"edges", seams.after.edges},
                                   {"length_metres", seams.after.length},

@@ -46,7 +46,7 @@ struct BakeReport {
     size_t lightmapTexels = 0;
     size_t coveredTexels = 0;
     size_t buriedTexels = 0;  // of them, wholly inside closed geometry: filled from their neighbours
-    // The lightmaps' chart seams (bake/lightmap_seams.h), all atlases pooled; none without lightmaps.
+    // The lightmaps' chart seams (lightmap/lightmap_seams.h), all atlases pooled; none without lightmaps.
     std::optional<LightmapSeamReport> lightmapSeams;
     size_t pixels = 0;
     long peakMemoryBytes = 0;  // the process's peak resident set size when the bake ended

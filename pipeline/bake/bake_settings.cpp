@@ -1,7 +1,8 @@
 #include "bake/bake_settings.h"
 
-#include "cone/irradiance_cache.h"
+#include "gather/irradiance_cache.h"
 #include "core/error.h"
+#include "core/text.h"
 #include "scene/scene.h"
 
 #include <cerrno>
@@ -11,16 +12,6 @@
 #include <utility>
 
 namespace vl {
-namespace {
-
-std::string real(double v) {
-    std::ostringstream out;
-    out << v;
-    return out.str();
-}
-
-}  // namespace
-
 const SettingsTable<BakeSettings>& bakeSettingsTable() {
     using S = BakeSettings;
     static const SettingsTable<BakeSettings> table = {
@@ -71,41 +62,41 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          }},
         // Cone tracing
         {"cones", "cones per hemisphere of the receivers' final gather: 6, 16 or 32 (default 32)",
-         [](S& s, const std::string& v) { s.cone.coneCount = parseIntSetting("cones", v, 1, 64); }},
+         [](S& s, const std::string& v) { s.gather.cone.coneCount = parseIntSetting("cones", v, 1, 64); }},
         {"aperture", "cone half-angle in degrees; 0 = the cone set's tiling angle (default 0)",
-         [](S& s, const std::string& v) { s.cone.apertureDegrees = static_cast<float>(parseRealSetting("aperture", v, 0, 89.9)); }},
+         [](S& s, const std::string& v) { s.gather.cone.apertureDegrees = static_cast<float>(parseRealSetting("aperture", v, 0, 89.9)); }},
         {"cone-offset", "cone start offset along the normal, in voxels (default 1.5)",
-         [](S& s, const std::string& v) { s.cone.startOffset = static_cast<float>(parseRealSetting("cone-offset", v, 0, 16)); }},
+         [](S& s, const std::string& v) { s.gather.cone.startOffset = static_cast<float>(parseRealSetting("cone-offset", v, 0, 16)); }},
         {"step-factor", "cone step as a fraction of its diameter (default 0.5)",
-         [](S& s, const std::string& v) { s.cone.stepFactor = static_cast<float>(parseRealSetting("step-factor", v, 0.05, 4)); }},
+         [](S& s, const std::string& v) { s.gather.cone.stepFactor = static_cast<float>(parseRealSetting("step-factor", v, 0.05, 4)); }},
         {"cone-max-distance", "metres a cone marches at most; 0 = until opaque or out of the grid (default 0)",
-         [](S& s, const std::string& v) { s.cone.maxDistance = static_cast<float>(parseRealSetting("cone-max-distance", v, 0, 1e9)); }},
+         [](S& s, const std::string& v) { s.gather.cone.maxDistance = static_cast<float>(parseRealSetting("cone-max-distance", v, 0, 1e9)); }},
         {"bounces", "voxel-to-voxel bounces before the final gather (default 8)",
-         [](S& s, const std::string& v) { s.bounces = parseIntSetting("bounces", v, 0, 1024); }},
+         [](S& s, const std::string& v) { s.gather.bounces = parseIntSetting("bounces", v, 0, 1024); }},
         {"bounce-cones", "cones per hemisphere of the voxel-to-voxel bounces: 6, 16 or 32 (default 6)",
-         [](S& s, const std::string& v) { s.bounceCones = parseIntSetting("bounce-cones", v, 1, 64); }},
+         [](S& s, const std::string& v) { s.gather.bounceCones = parseIntSetting("bounce-cones", v, 1, 64); }},
         {"bounce-tail", "add the rest of the bounce series as a geometric tail after the last bounce (default true)",
-         [](S& s, const std::string& v) { s.bounceTail = parseBoolSetting("bounce-tail", v); }},
+         [](S& s, const std::string& v) { s.gather.bounceTail = parseBoolSetting("bounce-tail", v); }},
         {"gather-level", "receivers interpolate irradiance gathered once per surface side of each block of 2^n voxels; -1: every sample gathers its own cones (default 2)",
-         [](S& s, const std::string& v) { s.gatherLevel = parseIntSetting("gather-level", v, -1, kMaxCacheLevel); }},
+         [](S& s, const std::string& v) { s.gather.gatherLevel = parseIntSetting("gather-level", v, -1, kMaxCacheLevel); }},
         {"gather-turns", "cone sets traced per gather point of the final gather, each turned by 1/n turn (default 2)",
-         [](S& s, const std::string& v) { s.gatherTurns = parseIntSetting("gather-turns", v, 1, kMaxGatherTurns); }},
+         [](S& s, const std::string& v) { s.gather.gatherTurns = parseIntSetting("gather-turns", v, 1, kMaxGatherTurns); }},
         {"bright-patches", "faces brighter than this many times the mean face are gathered by shadow rays at the gather points, not by cones; 0: none; off in a scene with punctual lights under hit-light exact (default 8)",
-         [](S& s, const std::string& v) { s.brightPatches.factor = static_cast<float>(parseRealSetting("bright-patches", v, 0, 1e6)); }},
+         [](S& s, const std::string& v) { s.gather.brightPatches.factor = static_cast<float>(parseRealSetting("bright-patches", v, 0, 1e6)); }},
         {"bright-patch-cell", "voxels per axis of the cells whose bright faces merge into one patch (default 8)",
-         [](S& s, const std::string& v) { s.brightPatches.cellVoxels = parseIntSetting("bright-patch-cell", v, 1, 1024); }},
+         [](S& s, const std::string& v) { s.gather.brightPatches.cellVoxels = parseIntSetting("bright-patch-cell", v, 1, 1024); }},
         {"bright-patch-samples", "shadow-ray samples of the bright patches per gather point (default 64)",
-         [](S& s, const std::string& v) { s.brightPatches.samples = parseIntSetting("bright-patch-samples", v, 1, 4096); }},
+         [](S& s, const std::string& v) { s.gather.brightPatches.samples = parseIntSetting("bright-patch-samples", v, 1, 4096); }},
         {"bright-patch-max", "most bright patches, the most powerful first (default 256, at most 1024)",
-         [](S& s, const std::string& v) { s.brightPatches.maxPatches = parseIntSetting("bright-patch-max", v, 0, 1024); }},
+         [](S& s, const std::string& v) { s.gather.brightPatches.maxPatches = parseIntSetting("bright-patch-max", v, 0, 1024); }},
         {"gather-visibility", "what a gather point sees by: rays (against the triangles, reading the mips where they hit), cones (the mips' opacity) or auto (rays unless the scene's rays see the backs of single-sided surfaces) (default auto)",
-         [](S& s, const std::string& v) { s.gatherVisibility = parseGatherVisibility(v); }},
+         [](S& s, const std::string& v) { s.gather.visibility = parseGatherVisibility(v); }},
         {"gather-rays", "rays per axis of each final-gather point's n x n fan when gathering by rays; as many as bounce-rays reuse the bounces' rays (default 14)",
-         [](S& s, const std::string& v) { s.gatherRays = parseIntSetting("gather-rays", v, 1, kMaxGatherRaysPerAxis); }},
+         [](S& s, const std::string& v) { s.gather.gatherRays = parseIntSetting("gather-rays", v, 1, kMaxGatherRaysPerAxis); }},
         {"bounce-rays", "rays per axis of each bounce gather point's n x n fan when gathering by rays, traced once for all bounces (default 14)",
-         [](S& s, const std::string& v) { s.bounceRays = parseIntSetting("bounce-rays", v, 1, kMaxGatherRaysPerAxis); }},
+         [](S& s, const std::string& v) { s.gather.bounceRays = parseIntSetting("bounce-rays", v, 1, kMaxGatherRaysPerAxis); }},
         {"bounce-gather-level", "voxels interpolate bounce light gathered once per surface side of each block of 2^n voxels (default 2)",
-         [](S& s, const std::string& v) { s.bounceGatherLevel = parseIntSetting("bounce-gather-level", v, 0, kMaxCacheLevel); }},
+         [](S& s, const std::string& v) { s.gather.bounceGatherLevel = parseIntSetting("bounce-gather-level", v, 0, kMaxCacheLevel); }},
         // Receivers
         {"materials", "authored (as the glTF gives them) or lambert (every material diffuse, metallic 0 and no transmission, its base colour kept) (default authored)",
          [](S& s, const std::string& v) {
@@ -117,14 +108,14 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) {
              if (v != "texels" && v != "points")
                  throw SettingsError("setting lightmap-gather = '" + v + "' is not one of texels, points");
-             s.lightmapGather = v == "texels" ? LightmapGather::Texels : LightmapGather::Points;
+             s.gather.lightmapGather = v == "texels" ? LightmapGather::Texels : LightmapGather::Points;
          }},
         {"texel-gather-spacing", "texels between a lightmap's gather records; 0: about 1.5 voxels (default 0)",
-         [](S& s, const std::string& v) { s.texelGatherSpacing = parseIntSetting("texel-gather-spacing", v, 0, 64); }},
+         [](S& s, const std::string& v) { s.gather.texelGatherSpacing = parseIntSetting("texel-gather-spacing", v, 0, 64); }},
         {"lightmap-side", "which side of a double-sided surface its lightmap texels hold: inside (the side that sees less open sky, what a person in the room sees, never the inside of a closed solid, and a side facing the open space the scene's cameras stand in is never taken for one; a thin window frame whose front faces out is lit from the room) or front (the triangles' winding) (default inside)",
          [](S& s, const std::string& v) { s.lightmapSide = parseLightmapSide(v); }},
         {"lightmap-filter", "passes of the edge-stopping filter over a lightmap's gather records, each twice as wide (records one surface holds, whose difference their noise explains, are averaged); 0: off (default 3)",
-         [](S& s, const std::string& v) { s.lightmapFilterPasses = parseIntSetting("lightmap-filter", v, 0, 5); }},
+         [](S& s, const std::string& v) { s.gather.lightmapFilterPasses = parseIntSetting("lightmap-filter", v, 0, 5); }},
         {"lightmap-res", "lightmap atlas width and height in texels, exactly (generated UVs get the texel size that fits them); auto: the bake sizes each atlas, the smallest power-of-two square that holds it at texels of half a voxel or finer, up to 4096 (default 256)",
          [](S& s, const std::string& v) {
              if (v == "auto") {
@@ -156,7 +147,7 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
         {"hit-light", "how a lightmap record's ray that hits a surface takes the punctual lights' light there: voxels (its voxel's face light, which a shaded point shares with a sunlit one beside it in the same voxel) or exact (a shadow ray from the hit point, with voxel-visibility rays; in a scene with punctual lights the bright patches are then off) (default exact)",
          [](S& s, const std::string& v) {
              if (v != "voxels" && v != "exact") throw SettingsError("setting hit-light = '" + v + "' is not one of voxels, exact");
-             s.hitLightExact = v == "exact";
+             s.gather.hitLightExact = v == "exact";
          }},
         {"many-lights", "how a scene of more than 64 point lights or emissive triangles is lit: tree (each receiver and voxel takes a cut of a tree of the lights: the near and bright ones exact, the far ones sampled by importance, unbiased) or each (every receiver visits every light) (default tree)",
          [](S& s, const std::string& v) {
@@ -164,9 +155,9 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
              s.lightTrees = v == "tree";
          }},
         {"near-field", "a lightmap record's ray that hits a surface nearer than this many voxels traces the light there on, by a path of cosine rays, instead of reading the voxel, which a crease narrower than a voxel shares with the open surface beside it; 0: every hit reads its voxel (default 3)",
-         [](S& s, const std::string& v) { s.nearFieldVoxels = static_cast<float>(parseRealSetting("near-field", v, 0, 64)); }},
+         [](S& s, const std::string& v) { s.gather.nearFieldVoxels = static_cast<float>(parseRealSetting("near-field", v, 0, 64)); }},
         {"lightmap-gradients", "a lightmap's texels take their gather records' light turned to their own normal by the records' rotation gradients, seen by the records' own rays (Ward and Heckbert's): a curved cushion's or a moulding's texels face a little away from their records (default true)",
-         [](S& s, const std::string& v) { s.lightmapGradients = parseBoolSetting("lightmap-gradients", v); }},
+         [](S& s, const std::string& v) { s.gather.lightmapGradients = parseBoolSetting("lightmap-gradients", v); }},
         {"lightmap-stitch", "stitch lightmap chart seams: where one surface is split between two charts, move the texels on both sides by a small least-squares solve so they read one value on the split itself (default true)",
          [](S& s, const std::string& v) { s.lightmapStitch = parseBoolSetting("lightmap-stitch", v); }},
         {"lightmap-subsamples", "n × n sub-texel probes per texel (default 4)",
@@ -233,50 +224,13 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
     return table;
 }
 
-ConeSettings bounceConeSettings(const BakeSettings& settings) {
-    ConeSettings bounce = settings.cone;
-    bounce.coneCount = settings.bounceCones;
-    return bounce;
-}
-
-bool takesLightsAtHits(const BakeSettings& settings, bool punctualLights) {
-    return settings.hitLightExact && punctualLights && settings.lighting.visibilityBy == VoxelVisibility::Rays;
-}
-
-BrightPatchSettings gatherBrightPatches(const BakeSettings& settings, bool punctualLights) {
-    BrightPatchSettings patches = settings.brightPatches;
-    if (takesLightsAtHits(settings, punctualLights)) patches.factor = 0.0f;
-    return patches;
-}
-
 void validateBakeSettings(const BakeSettings& s) {
-    validateConeSettings(s.cone, "bake settings");
-    validateConeSettings(bounceConeSettings(s), "bake settings (bounce-cones)");
     s.lightmap.validate();
     if (s.voxel.resolution < 0)  // 0: chosen from the scene
         throw SettingsError("setting resolution = " + std::to_string(s.voxel.resolution) + " must be at least 1");
     if (s.voxel.voxelSize < 0.0 || !std::isfinite(s.voxel.voxelSize))
-        throw SettingsError("setting voxel-size = " + real(s.voxel.voxelSize) + " must be positive and finite");
-    if (s.bounces < 0 || s.bounces > 1024) throw SettingsError("setting bounces = " + std::to_string(s.bounces) + " is outside 0..1024");
-    if (s.gatherLevel < -1 || s.gatherLevel > kMaxCacheLevel)
-        throw SettingsError("setting gather-level = " + std::to_string(s.gatherLevel) + " is outside -1.." +
-                            std::to_string(kMaxCacheLevel));
-    if (s.gatherTurns < 1 || s.gatherTurns > kMaxGatherTurns)
-        throw SettingsError("setting gather-turns = " + std::to_string(s.gatherTurns) + " is outside 1.." +
-                            std::to_string(kMaxGatherTurns));
-    if (!(s.brightPatches.factor >= 0.0f) || !std::isfinite(s.brightPatches.factor))
-        throw SettingsError("setting bright-patches = " + real(s.brightPatches.factor) + " must be 0 or positive and finite");
-    if (s.brightPatches.cellVoxels < 1 || s.brightPatches.cellVoxels > 1024)
-        throw SettingsError("setting bright-patch-cell = " + std::to_string(s.brightPatches.cellVoxels) + " is outside 1..1024");
-    if (s.brightPatches.maxPatches < 0 || s.brightPatches.maxPatches > 65536)
-        throw SettingsError("setting bright-patch-max = " + std::to_string(s.brightPatches.maxPatches) + " is outside 0..65536");
-    if (s.bounceGatherLevel < 0 || s.bounceGatherLevel > kMaxCacheLevel)
-        throw SettingsError("setting bounce-gather-level = " + std::to_string(s.bounceGatherLevel) + " is outside 0.." +
-                            std::to_string(kMaxCacheLevel));
-    for (const auto& [name, rays] : {std::pair<const char*, int>{"gather-rays", s.gatherRays}, {"bounce-rays", s.bounceRays}})
-        if (rays < 1 || rays > kMaxGatherRaysPerAxis)
-            throw SettingsError(std::string("setting ") + name + " = " + std::to_string(rays) + " is outside 1.." +
-                                std::to_string(kMaxGatherRaysPerAxis));
+        throw SettingsError("setting voxel-size = " + numberText(s.voxel.voxelSize) + " must be positive and finite");
+    validateGatherSettings(s.gather);
     if (s.direct.emitterStrata < 1 || s.direct.emitterStrata > 64)
         throw SettingsError("setting emitter-strata = " + std::to_string(s.direct.emitterStrata) + " is outside 1..64");
     if (s.direct.skyStrata < 1 || s.direct.skyStrata > 64)
@@ -290,20 +244,29 @@ void validateBakeSettings(const BakeSettings& s) {
                             "voxel-visibility rays light by inverse square: add voxel-visibility stepping to use it");
 }
 
+GatherInputs gatherInputs(const BakeSettings& settings) {
+    GatherInputs inputs;
+    inputs.receivers = settings.outputs.lightmaps || settings.outputs.images;
+    inputs.voxelsLitByRays = settings.lighting.visibilityBy == VoxelVisibility::Rays;
+    inputs.skyStrata = settings.direct.skyStrata;
+    inputs.quiet = settings.quiet;
+    return inputs;
+}
+
 std::string describeBakeSettings(const BakeSettings& s) {
     std::ostringstream out;
     out << "resolution=" << (s.voxel.resolution > 0 ? std::to_string(s.voxel.resolution) : "auto")
-        << ", voxel-size=" << (s.voxel.voxelSize > 0.0 ? real(s.voxel.voxelSize) : "auto")
+        << ", voxel-size=" << (s.voxel.voxelSize > 0.0 ? numberText(s.voxel.voxelSize) : "auto")
         << ", fill-interior=" << s.voxel.fillInterior
         << ", voxel-visibility=" << (s.lighting.visibilityBy == VoxelVisibility::Rays ? "rays" : "stepping")
         << ", normal-weights=" << toString(s.lighting.normalWeights)
-        << ", hdda=" << (s.lighting.traversal == VisibilityTraversal::Hdda) << ", cones=" << s.cone.coneCount
-        << ", aperture=" << s.cone.apertureDegrees << ", cone-offset=" << s.cone.startOffset
-        << ", step-factor=" << s.cone.stepFactor << ", bounces=" << s.bounces << ", bounce-cones=" << s.bounceCones << ", bounce-tail=" << s.bounceTail << ", gather-level=" << s.gatherLevel << ", gather-turns=" << s.gatherTurns << ", bright-patches=" << s.brightPatches.factor << ", bright-patch-cell=" << s.brightPatches.cellVoxels << ", bright-patch-max=" << s.brightPatches.maxPatches << ", bright-patch-samples=" << s.brightPatches.samples
-        << ", gather-visibility=" << toString(s.gatherVisibility) << ", gather-rays=" << s.gatherRays
-        << ", bounce-rays=" << s.bounceRays << ", bounce-gather-level=" << s.bounceGatherLevel
-        << ", lightmap-gather=" << (s.lightmapGather == LightmapGather::Texels ? "texels" : "points")
-        << ", texel-gather-spacing=" << s.texelGatherSpacing << ", lightmap-filter=" << s.lightmapFilterPasses
+        << ", hdda=" << (s.lighting.traversal == VisibilityTraversal::Hdda) << ", cones=" << s.gather.cone.coneCount
+        << ", aperture=" << s.gather.cone.apertureDegrees << ", cone-offset=" << s.gather.cone.startOffset
+        << ", step-factor=" << s.gather.cone.stepFactor << ", bounces=" << s.gather.bounces << ", bounce-cones=" << s.gather.bounceCones << ", bounce-tail=" << s.gather.bounceTail << ", gather-level=" << s.gather.gatherLevel << ", gather-turns=" << s.gather.gatherTurns << ", bright-patches=" << s.gather.brightPatches.factor << ", bright-patch-cell=" << s.gather.brightPatches.cellVoxels << ", bright-patch-max=" << s.gather.brightPatches.maxPatches << ", bright-patch-samples=" << s.gather.brightPatches.samples
+        << ", gather-visibility=" << toString(s.gather.visibility) << ", gather-rays=" << s.gather.gatherRays
+        << ", bounce-rays=" << s.gather.bounceRays << ", bounce-gather-level=" << s.gather.bounceGatherLevel
+        << ", lightmap-gather=" << (s.gather.lightmapGather == LightmapGather::Texels ? "texels" : "points")
+        << ", texel-gather-spacing=" << s.gather.texelGatherSpacing << ", lightmap-filter=" << s.gather.lightmapFilterPasses
         << ", lightmap-res="
         << (s.lightmap.autoResolution ? std::string("auto") : std::to_string(s.lightmap.width))
         << ", lightmap-subsamples=" << s.lightmap.subsamplesPerAxis << ", emitter-strata=" << s.direct.emitterStrata
@@ -316,16 +279,16 @@ std::string describeBakeSettings(const BakeSettings& s) {
         out << ", attenuation=" << s.lighting.attenuation->constant << "," << s.lighting.attenuation->linear << ","
             << s.lighting.attenuation->quadratic;
     if (s.device != cuda::DeviceChoice::Cpu) out << ", device=" << cuda::toString(s.device);
-    if (s.lightmap.texelSize > 0.0) out << ", lightmap-texel=" << real(s.lightmap.texelSize);
+    if (s.lightmap.texelSize > 0.0) out << ", lightmap-texel=" << numberText(s.lightmap.texelSize);
     if (!s.generateLightmapUvs) out << ", lightmap-uvs=false";
     if (s.lambertMaterials) out << ", materials=lambert";
     if (s.lightmapSide != LightmapSide::Inside) out << ", lightmap-side=" << toString(s.lightmapSide);
     if (!s.lightmapStitch) out << ", lightmap-stitch=false";
-    if (!s.lightmapGradients) out << ", lightmap-gradients=false";
-    if (!s.hitLightExact) out << ", hit-light=voxels";
+    if (!s.gather.lightmapGradients) out << ", lightmap-gradients=false";
+    if (!s.gather.hitLightExact) out << ", hit-light=voxels";
     if (!s.lightTrees) out << ", many-lights=each";
     if (s.direct.lightCut != DirectLightSettings{}.lightCut) out << ", light-cut=" << s.direct.lightCut;
-    if (s.nearFieldVoxels != BakeSettings{}.nearFieldVoxels) out << ", near-field=" << s.nearFieldVoxels;
+    if (s.gather.nearFieldVoxels != GatherSettings{}.nearFieldVoxels) out << ", near-field=" << s.gather.nearFieldVoxels;
     if (s.lightmapImageSubsamples != BakeSettings{}.lightmapImageSubsamples)
         out << ", lightmap-image-subsamples=" << s.lightmapImageSubsamples;
     if (s.filesOutsideScene) out << ", files-outside-scene=true";

@@ -1,7 +1,7 @@
 #include "bake/job_file.h"
 
 #include "bake/output_names.h"
-#include "bake/settings_table.h"
+#include "core/settings_table.h"
 #include "core/error.h"
 
 #include <nlohmann/json.hpp>

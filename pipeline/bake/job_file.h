@@ -1,6 +1,18 @@
 // Job files: many scenes in one batch, settings globally or per scene, lights and cameras
-// added to scenes that have none, a choice of outputs. Relative paths resolve against the job file.
-//
+// added to scenes that have none, a choice of outputs. Relative paths resolve against the job
+// file. The format, with an example, is next to readJobFile; the user's side is in
+// docs/usage.md, "Job files".
+#pragma once
+
+#include "bake/bake_job.h"
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace vl {
+
+// A job file:
 // {
 //   "output": "output",                       // root folder for scenes without "output"
 //   "settings": { "resolution": 128, "lightmap-res": 512 },   // any bake setting, for all
@@ -21,21 +33,12 @@
 // Every key of every object is one of those above (a light also takes "direction", "range",
 // "angle", "innerConeAngle", "outerConeAngle", each for the types it belongs to; "settings"
 // takes the bake settings): another is refused, naming the file, the place and the closest
-// known key. A scene bakes
-// into <output>/<name> (name: its file's stem by default) or into its "output", a relative
-// path inside the job's output folder; a name is one folder's name (no "/", "\", "..",
-// control characters, nor a name of output_names.h), and each scene's folder, links resolved,
-// lies inside the output folder, neither another scene's nor inside or around one.
-#pragma once
-
-#include "bake/bake_job.h"
-
-#include <string>
-#include <utility>
-#include <vector>
-
-namespace vl {
-
+// known key. A scene bakes into <output>/<name> (name: its file's stem by default) or into its
+// "output", a relative path inside the job's output folder; a name is one folder's name (no
+// "/", "\", "..", control characters, nor a name of output_names.h), and each scene's folder,
+// links resolved, lies inside the output folder, neither another scene's nor inside or around
+// one.
+//
 // Each scene starts from `defaults`; the file's global and per-scene settings apply on top,
 // then `command`, the settings the command line gave (name, value): what the user typed last
 // wins over the file (a job baked at another lightmap-res without editing it). The scenes bake

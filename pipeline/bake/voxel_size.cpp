@@ -1,7 +1,8 @@
 #include "bake/voxel_size.h"
 
 #include "bake/bake.h"
-#include "bake/gather_visibility.h"
+#include "core/text.h"
+#include "gather/gather_visibility.h"
 #include "core/error.h"
 #include "core/memory.h"
 #include "core/math.h"
@@ -161,10 +162,8 @@ namespace {
 // The count nearest x of the form 2·cellVoxels·k − 1 (at least one such). Why: the bake
 // centres the scene's box on a voxel corner (anchorToVoxelGrid), so with such a count along a
 // side the two walls that bound it lie in the outermost voxels of whole gather cells, each
-// cell's point standing for a full cell of wall. Other counts cut those cells: on the Cycles
-// Cornell boxes at gather level 2 (cells of 4 voxels) 55 / 63 / 71 / 79 voxels gave lightmap
-// errors of 2.96 / 2.70 / 2.72 / 2.64% (quad) and 2.88 / 2.69 / 2.46 / 2.58% (point), and 59 /
-// 67 / 75 gave 3.55 / 3.14 / 3.18% and 3.48 / 3.15 / 2.79% (`voxlight bench`, 2026-11-27).
+// cell's point standing for a full cell of wall. Other counts cut those cells into strips, and
+// the lightmaps' error rises (docs/decisions.md, "A voxel size the scene needs").
 int cellAlignedCount(double x, int cellVoxels) {
     const double period = 2.0 * cellVoxels;
     const double k = std::max(1.0, std::round((std::min(x, double(1 << 21)) + 1.0) / period));
@@ -213,13 +212,13 @@ VoxelSizeChoice chooseVoxelSize(const Scene& scene, const BakeSettings& settings
         const FreePaths& paths = choice.freePaths = surfaceFreePaths(scene);
         // Only a user's choice of cones is known here: auto decides on the gather points, which
         // the voxel size places (ray_gather.h chooseGatherVisibility).
-        const bool byCones = settings.gatherVisibility == GatherVisibility::Cones;
+        const bool byCones = settings.gather.visibility == GatherVisibility::Cones;
         // Counts along the scene's own longest side: the bake has turned the scene into its
         // own frame before it sizes it (scene/own_frame.h), so that side is along a grid axis;
         // a scene given here unturned is measured in its own frame all the same.
         const double ownLongest = ownFrameLongestSide(scene, longest);
         const bool turned = ownLongest < longest * (1.0 - 1e-4);
-        const int cellVoxels = 1 << std::max(0, std::max(settings.gatherLevel, settings.bounceGatherLevel));
+        const int cellVoxels = 1 << std::max(0, std::max(settings.gather.gatherLevel, settings.gather.bounceGatherLevel));
         int ownVoxels = 0;
         char text[320];
         if (!byCones && 2 * paths.hits >= paths.rays) {
@@ -279,14 +278,6 @@ VoxelSizeChoice chooseVoxelSize(const Scene& scene, const BakeSettings& settings
                                       "): the bounce light it gives may be low (by 20-60% at a third of a voxel); "
                                       "move it off the surface or give a smaller voxel-size");
     return choice;
-}
-
-std::string lengthText(double metres) {
-    char text[32];
-    if (metres >= 1.0) std::snprintf(text, sizeof text, "%.3g m", metres);
-    else if (metres >= 0.01) std::snprintf(text, sizeof text, "%.3g cm", metres * 100.0);
-    else std::snprintf(text, sizeof text, "%.3g mm", metres * 1000.0);
-    return text;
 }
 
 std::string describeVoxelSize(const VoxelSizeChoice& choice) {

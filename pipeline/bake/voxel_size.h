@@ -1,43 +1,12 @@
-// The voxel size a bake uses when the user gives neither `resolution` nor `voxel-size`:
-// chosen from what the scene holds, the coarsest that keeps each feature within the error the
-// accuracy issue asks of the bake (README "A voxel size the scene needs").
-//
-// Features, each measured by what it does to the bake as the voxels coarsen:
-//  * how far light goes between the scene's surfaces: kVoxelsPerFreePath voxels along the
-//    mean free path of cosine rays from its surfaces (surfaceFreePaths). The indirect
-//    light's detail follows the distances it crosses between bounces, not the scene's extent:
-//    the Cycles Cornell boxes (mean free path 27.3 / 27.2 cm, 55.9 cm long) and the two rooms
-//    (1.88 m, 6.1 m long) have their best error² × time at 63 and 103–127 voxels along their
-//    longest sides, 31–35 along their free paths (`voxlight bench`, gather level 2,
-//    2026-11-27). The count along the scene's own longest side is rounded to fit the gather
-//    cells (cellAlignedCount in voxel_size.cpp), at most kMaxFreePathVoxels (a warning).
-//  * the scene's size, where no free path applies: kSceneVoxels along its longest side, in
-//    its own frame, for an open scene (most of its surfaces' rays leave it: zdm2, the window
-//    room) and for a bake told to gather by cones (gather-visibility=cones), whose error does
-//    not fall with finer voxels (zdm2 by cones: 21.8 / 36.9 / 25.2 / 19.3% image error at 95
-//    / 111 / 127 / 159 voxels). Where auto picks cones (on the gather points, which need the
-//    voxel size first) the free-path rule stands.
-//    Until 2026-11-27 this rule alone set every scene's size, at 111 voxels and gather
-//    level 3: the coarsest count that held the turned Cycles boxes within 3% while the grid
-//    stayed on the world axes (scene/own_frame.h).
-//  * each point or spot light's clearance, its distance to the nearest surface: a light less
-//    than about half a voxel from a surface falls into that surface's voxel layer and loses
-//    most of the light it gives the bounces (a point light 0.32 voxel under a ceiling: −21% of
-//    the room's first bounce, 0.16 voxel: −60%; 0.64 voxel and more: within the coarse grid's
-//    own +1…+7%). The voxels are made fine enough that every light clears one voxel.
-//  * the memory budget: never finer than what fits in the memory available
-//    (bake.h checkMemoryBudget's estimate), and never more than kMaxRefinement times finer
-//    than the rules above, so a light placed on a surface cannot make a bake of billions of
-//    voxels; either limit is a warning naming the light it leaves unresolved.
-// Measured not to need voxels, so they do not set the size: walls thinner than a voxel (the
-// dark one of two sealed rooms keeps at most 0.30% of the lit one's light, at a wall half a
-// voxel thick: each side of a wall gathers and reflects on its own), emissive surfaces of
-// any size or distance from a surface (their light is integrated over their triangles
-// exactly: a 1 cm emitter kept its first bounce within the coarse grid's own bias down to 16
-// voxels across its room) and, since the grid turns with the scene, its orientation. Nor, by
-// construction, the lightmap's texel size: the direct light is exact per texel and the
-// indirect light is gathered on 4-voxel cells whatever the texels (not measured against a
-// finer reference: the Cycles references are 256² only).
+// The voxel size a bake uses when the user gives neither `resolution` nor `voxel-size`: the
+// coarsest that keeps each feature of the scene within the error the accuracy issue asks of the
+// bake. The features that set it, each measured by what it does to the bake as the voxels
+// coarsen: how far light goes between the scene's surfaces (kVoxelsPerFreePath), the scene's
+// size where no free path applies (kSceneVoxels), each point or spot light's clearance from the
+// nearest surface (kMaxRefinement), and the memory available. Walls thinner than a voxel,
+// emitters of any size or distance from a surface, the scene's orientation (the grid turns with
+// it) and the lightmap's texel size do not set it: measured not to need voxels, or by
+// construction. The measurements: docs/decisions.md, "A voxel size the scene needs".
 #pragma once
 
 #include "bake/bake_settings.h"
@@ -48,8 +17,24 @@
 
 namespace vl {
 
+// The free-path rule: this many voxels along the mean free path of cosine rays from the
+// scene's surfaces (surfaceFreePaths). The indirect light's detail follows the distances it
+// crosses between bounces, not the scene's extent. The count along the scene's own longest side
+// is rounded to fit the gather cells (cellAlignedCount in voxel_size.cpp), at most
+// kMaxFreePathVoxels (a warning).
 constexpr double kVoxelsPerFreePath = 31.0;  // the free-path rule
+// The size rule, where no free path applies: this many voxels along the scene's longest side,
+// in its own frame, for an open scene (most of its surfaces' rays leave it: zdm2, the window
+// room) and for a bake told to gather by cones (gather-visibility=cones), whose error does not
+// fall with finer voxels. Where auto picks cones (on the gather points, which need the voxel
+// size first) the free-path rule stands.
 constexpr int kSceneVoxels = 95;      // the size rule where no free path applies (8k − 1)
+// The lights' rule: a point or spot light less than about half a voxel from a surface falls
+// into that surface's voxel layer and loses most of the light it gives the bounces, so the
+// voxels are made fine enough that every light clears one voxel. Never finer than what fits in
+// the memory available (bake.h checkMemoryBudget's estimate), and never more than this many
+// times finer than the rules above, so a light placed on a surface cannot make a bake of
+// billions of voxels; either limit is a warning naming the light it leaves unresolved.
 constexpr int kMaxRefinement = 8;     // the lights' rule goes at most this much finer
 // The free-path rule's most voxels along the longest side: a scene of narrow gaps (dense
 // furniture, foliage) would ask for a grid no bake of its size needs.
@@ -85,9 +70,6 @@ struct VoxelSizeChoice {
 // triangles or with a non-finite position (voxelSizeFor's checks), SettingsError when not even
 // the size rule fits in memory.
 VoxelSizeChoice chooseVoxelSize(const Scene& scene, const BakeSettings& settings);
-
-// "4.9 cm", "1.25 m", "0.56 mm": a length as a person reads it.
-std::string lengthText(double metres);
 
 // "voxel size 8.88 mm (63 along the longest side), set by …": the progress line.
 std::string describeVoxelSize(const VoxelSizeChoice& choice);

@@ -13,8 +13,8 @@ namespace {
 // The weights of each ring's cones (all equal: the cones of a ring are rotations of one
 // another), from cosineCellWeights at 1024² points averaged over each ring: accurate to
 // ~1e-4 (cell boundaries cut through ~1000 of the 10⁶ points). Tabulated because the
-// quadrature took ~40 ms at every start of the tool (`perf record` of `voxlight bake`); tests/cone/cone_set_test.cpp recomputes
-// them.
+// quadrature is a noticeable cost at every start of the tool (docs/decisions.md, "Cone
+// sets"); tests/cone/cone_set_test.cpp recomputes them.
 constexpr float kRingWeights6[] = {0.321405411f, 0.135718912f};
 constexpr float kRingWeights16[] = {0.135944366f, 0.0936838761f, 0.0335502625f};
 constexpr float kRingWeights32[] = {0.0750255585f, 0.0537967682f, 0.035118971f, 0.012468338f};

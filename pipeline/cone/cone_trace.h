@@ -1,33 +1,9 @@
 // Cone marching through the radiance mips (DESIGN.md "Cone tracing"), written once for the
 // TBB pass and the CUDA launchers: takes a MipView (radiance_mips.h), a ConeSet
 // (cone_set.h) and ConeSettings; gives the radiance a cone gathers and the irradiance at a
-// receiver (p, n).
-//
-// One cone, apex o, unit axis d, half-angle θ:
-//   diameter D(t) = max(h, 2 t tan θ) at distance t from the apex;
-//   segment [t, t + s] with s = stepFactor·D(t), sampled at its midpoint tm, trilinearly in
-//   the one level l nearest to λ = log2(D(tm)/h) − 1 (λ rounded, clamped to the chain). Why
-//   −1: a trilinear sample spreads over two voxels, so level log2(D/h) blurs over twice the
-//   cone's width; a closed box of radiance L then gathers 77–93 % of π·L (wide cones see its
-//   coarse border voxels as partly empty) against 94–97 % with the finer level. Why one level
-//   and not the blend of the two around λ: half the reads, and on the Cycles Cornell boxes a
-//   lower error (lightmaps 5.79% / 7.54% against 6.07% / 7.87%, quad / point) and fewer leaks
-//   (0.47% against 0.66% across a wall half a voxel thick). With stepFactor ≤ ½ the step is
-//   at most 2^(λ−l) ≤ √2 voxels of the sampled level, and trilinear tents sampled that far
-//   apart still sum to ≥ 2 − √2 of a wall's optical depth: a solid wall one voxel thick
-//   passes at most e^(−0.59·6.9) ≈ 2% of what lies behind it (the blend of two levels passed
-//   0.1%; the leak test bounds the result);
-//   opacity corrected for the segment length: a' = 1 − (1 − a)^(s / (h·2^l)) per level l
-//   (as 1 − exp(−σ s / (h·2^l)), see coneSegment), the premultiplied colour scaled by
-//   a'/a; front to back: C += (1 − A)·c', A += (1 − A)·a'.
-//   The cone stops at A ≥ 0.99, at maxDistance, or once it is outside the grid: past the
-//   axis's exit from the level-0 bounds by more than the support of the sampled level
-//   (1.5 of its voxels: a coarse border voxel's centre lies up to
-//   half a voxel outside, its trilinear weight reaches one voxel beyond; stopping at the
-//   bounds themselves drops half of every border wall's filtered opacity). A cone whose
-//   axis misses the bounds gathers nothing.
-// In a uniform medium of per-voxel opacity α this is Beer–Lambert at every level:
-// T = (1 − α)^(distance/h) (radiance_mips.h: the directional texels compose α along axes).
+// receiver (p, n). traceCone says how one cone marches: it samples one level finer than its
+// width, one level rather than a blend of two, and corrects each sample's opacity for its
+// step, so a uniform medium is Beer–Lambert at every level.
 #pragma once
 
 #include "cone/cone_set.h"
@@ -37,7 +13,7 @@
 
 namespace vl {
 
-// Cones sample one level finer than their diameter (see above).
+// Cones sample one level finer than their diameter (traceCone says why).
 constexpr float kConeLevelOffset = 1.0f;
 constexpr float kConeLevelScale = 0.5f;  // 2^−kConeLevelOffset: level = log2(D·scale / h)
 
@@ -206,6 +182,28 @@ struct ConeOrigin {
     float cosToNormal = 1.0f;
 };
 
+// One cone, apex o, unit axis d, half-angle θ:
+//   diameter D(t) = max(h, 2 t tan θ) at distance t from the apex;
+//   segment [t, t + s] with s = stepFactor·D(t), sampled at its midpoint tm, trilinearly in
+//   the one level l nearest to λ = log2(D(tm)/h) − 1 (λ rounded, clamped to the chain). Why
+//   −1: a trilinear sample spreads over two voxels, so level log2(D/h) blurs over twice the
+//   cone's width, and wide cones see a closed box's coarse border voxels as partly empty.
+//   Why one level and not the blend of the two around λ: half the reads, a lower error and
+//   fewer leaks (docs/decisions.md, "Cone marching"). With stepFactor ≤ ½ the step is
+//   at most 2^(λ−l) ≤ √2 voxels of the sampled level, and trilinear tents sampled that far
+//   apart still sum to ≥ 2 − √2 of a wall's optical depth: a solid wall one voxel thick
+//   passes at most e^(−0.59·6.9) ≈ 2% of what lies behind it (the leak test bounds it);
+//   opacity corrected for the segment length: a' = 1 − (1 − a)^(s / (h·2^l)) per level l
+//   (as 1 − exp(−σ s / (h·2^l)), see coneSegment), the premultiplied colour scaled by
+//   a'/a; front to back: C += (1 − A)·c', A += (1 − A)·a'.
+//   The cone stops at A ≥ 0.99, at maxDistance, or once it is outside the grid: past the
+//   axis's exit from the level-0 bounds by more than the support of the sampled level
+//   (1.5 of its voxels: a coarse border voxel's centre lies up to half a voxel outside, its
+//   trilinear weight reaches one voxel beyond; stopping at the bounds themselves drops half
+//   of every border wall's filtered opacity). A cone whose axis misses the bounds gathers
+//   nothing.
+// In a uniform medium of per-voxel opacity α this is Beer–Lambert at every level:
+// T = (1 − α)^(distance/h) (radiance_mips.h: the directional texels compose α along axes).
 // One cone; `dir` unit, tanHalfAngle > 0, maxDistance in metres (≤ 0: none).
 VL_HOSTDEV inline ConeResult traceCone(const MipView& mips, const vec3& apex, const vec3& dir, float tanHalfAngle,
                                        float stepFactor, float maxDistance, const ConeOrigin& origin = ConeOrigin()) {

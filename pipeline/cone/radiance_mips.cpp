@@ -154,11 +154,11 @@ MipTexel columnTexel(const MipLevel& children, const std::array<int32_t, 8>& slo
 // axis at a slant does not fall in one voxel per column: where it steps from this voxel into
 // the one behind, some columns hold it here and the rest there, and compositing the two
 // partly filled voxels as if independent lets through what no ray could pass (a plane split
-// half and half passes 25 %; a closed box turned 45° gathered 74–78 % of its radiance). So a
-// voxel that shows surface to the travel (coverage > 0) composites, in each column emptier
-// than its fullest one, the same column of the voxel behind it along the travel (`behind`,
-// one step of this level): a slanted wall is opaque from the first voxel that holds part of
-// it, and each column shows what it meets. What this leaves alone: an empty voxel; a floor
+// half and half passes 25 %, and a turned closed box gathers well under its radiance:
+// docs/decisions.md, "Cone marching"). So a voxel that shows surface to the travel
+// (coverage > 0) composites, in each column emptier than its fullest one, the same column of
+// the voxel behind it along the travel (`behind`, one step of this level): a slanted wall is
+// opaque from the first voxel that holds part of it, and each column shows what it meets. What this leaves alone: an empty voxel; a floor
 // seen edge-on (it shows no surface to the travel, and covers the same columns in the next
 // voxel anyway); a uniform medium (every column equally full: Beer–Lambert holds); an
 // axis-aligned wall (it fills every column of its voxel).

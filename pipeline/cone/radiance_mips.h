@@ -3,6 +3,31 @@
 // NanoVDB index grid (coord → texel index, −1 outside) over plain texel arrays, and a plain
 // view of them for the kernels in cone_trace.h.
 //
+// Every level keeps per voxel one texel per direction of travel, its children composited
+// front to back along it, so a wall one voxel thick stays opaque at every level to the cones
+// that cross it (MipTexel says how a level is made). The radiance channels are the light
+// voxels reflect: emission never enters the mips, so cones never count an emitter that the
+// receiver's exact direct term already holds.
+#pragma once
+
+#include "core/math.h"
+#include "voxel/vdb_file.h"
+#include "voxel/voxel_scene.h"
+
+#include <nanovdb/NanoVDB.h>
+#include <nanovdb/util/GridHandle.h>
+#include <nanovdb/util/HostBuffer.h>
+
+#include <array>
+#include <vector>
+
+namespace vl {
+
+using MipIndexGrid = nanovdb::NanoGrid<int32_t>;
+
+// Opacity cap: a solid voxel lets 10⁻³ through per voxel length, so σ stays finite.
+constexpr float kMaxMipOpacity = 0.999f;
+
 // Every level keeps per voxel one texel per direction of travel (+X, −X, +Y, −Y, +Z, −Z):
 // (α-premultiplied radiance, α, coverage). Coverage is the part of α that shows a surface:
 // a cone's colour is radiance / coverage (cone_trace.h), its opacity comes from α.
@@ -28,7 +53,7 @@
 //    a voxel's columns hold it and the rest lie in the voxel behind; where a voxel shows
 //    surface to the travel, its columns emptier than its fullest one take the voxel behind
 //    them (one step of the level, `behind`) front to back as well (radiance_mips.cpp
-//    makeParent says why; a turned closed box otherwise gathers 74–78 % of its radiance).
+//    makeParent says why).
 //  - `values`: the plain average of the children's isotropic (α·radiance, α) (level 0: the
 //    voxels' `radiance`), empty children zero, so Σ value·volume is the same at every level.
 //    This is the isotropic mip written to grids.vdb.
@@ -36,36 +61,6 @@
 // cone_trace.h interpolates σ rather than α for opacity (see there).
 // Levels are built until one has at most 8 voxels or spans at most 2 voxels on every axis
 // (at most MipView::kMaxLevels).
-//
-// Index convention. Level 0 follows voxel_scene.h: voxel i centred at i·h. A level-k voxel
-// covers level-0 voxels 2^k·I … 2^k·I + 2^k − 1, so its centre is their centroid,
-// (2^k·I + (2^k − 1)/2)·h — not 2^k·I·h. Each level's NanoVDB map carries that translation,
-// and mipIndexPosition() applies it, so a level-k parent's centre is exactly the corner
-// shared by its 8 children at level k−1.
-//
-// The radiance channels are the light voxels reflect (lighting stage); emission is not in
-// them and never enters the mips, so cones never count an emitter that the receiver's exact
-// direct term already holds.
-#pragma once
-
-#include "core/math.h"
-#include "voxel/vdb_file.h"
-#include "voxel/voxel_scene.h"
-
-#include <nanovdb/NanoVDB.h>
-#include <nanovdb/util/GridHandle.h>
-#include <nanovdb/util/HostBuffer.h>
-
-#include <array>
-#include <vector>
-
-namespace vl {
-
-using MipIndexGrid = nanovdb::NanoGrid<int32_t>;
-
-// Opacity cap: a solid voxel lets 10⁻³ through per voxel length, so σ stays finite.
-constexpr float kMaxMipOpacity = 0.999f;
-
 struct MipTexel {
     vec3 radiance = vec3(0.0f);  // α-premultiplied (coverage-premultiplied at level 0)
     float alpha = 0.0f;
@@ -128,6 +123,12 @@ struct MipView {
     VL_HOSTDEV vec3 centre() const { return 0.5f * (boundsMin + boundsMax); }
 };
 
+// Index convention. Level 0 follows voxel_scene.h: voxel i centred at i·h. A level-k voxel
+// covers level-0 voxels 2^k·I … 2^k·I + 2^k − 1, so its centre is their centroid,
+// (2^k·I + (2^k − 1)/2)·h — not 2^k·I·h. Each level's NanoVDB map carries that translation,
+// and mipIndexPosition() applies it, so a level-k parent's centre is exactly the corner
+// shared by its 8 children at level k−1.
+//
 // Index-space position of world point p at `level`, with voxel centres at integers.
 VL_HOSTDEV inline vec3 mipIndexPosition(const vec3& p, float voxelSize, int level) {
     const float levelVoxelSize = ldexpf(voxelSize, level);
@@ -204,8 +205,9 @@ RadianceMips buildRadianceMips(const VoxelScene& voxels, const std::vector<vec3>
                                const std::vector<FaceRadiance>& faceRadiance);
 
 // Level 0 alone: all that the gathers by rays read (a ray reads the voxels it hits, never a
-// coarser level), without the coarser levels' 40% of the mips' time (the quad box at 111
-// voxels, timers inside a `voxlight bake`; the lightmap the same bytes). addParentLevels adds them where cones or grids.vdb want them.
+// coarser level), without the coarser levels' share of the mips' time (docs/decisions.md,
+// "Cone marching"); the lightmap is the same bytes. addParentLevels adds them where cones or
+// grids.vdb want them.
 RadianceMips buildLevelZeroMips(const VoxelScene& voxels, const std::vector<vec3>& radiance,
                                 const std::vector<FaceRadiance>& faceRadiance);
 

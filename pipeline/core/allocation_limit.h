@@ -1,17 +1,14 @@
 // A cap on single allocations while a library parses a file from elsewhere. OpenVDB reads a
-// length from the file and allocates that much before reading the bytes (a metadata string is
-// even filled first): a 10 kB .vdb whose metadata claimed a 2.5 GB name took 12.6 GB and 67 s
-// before failing. No single allocation that parsing a file needs can be larger than the file
-// itself, give or take the largest fixed-size node, so a reader sets the cap to that bound for
-// the scope of the library's calls.
-//
-// Not enforced under ThreadSanitizer, whose runtime defines operator new itself (strongly, so a
-// second definition does not link); ASan's runtime lets this one replace its own.
+// length from the file and allocates that much before reading the bytes, so a small file that
+// claims a huge length takes the machine's memory before it fails (docs/decisions.md,
+// "Allocation cap"). No single allocation that parsing a file needs can be larger than the
+// file itself, give or take the largest fixed-size node, so a reader sets the cap to that bound
+// for the scope of the library's calls.
 //
 // Inside the scope, on the calling thread, the global operator new (replaced in
-// allocation_limit.cpp, otherwise malloc as libstdc++'s is) refuses any single allocation over
-// the cap with std::bad_alloc before asking for the memory; the reader reports the file as
-// unreadable, naming the size it claimed. Scopes nest (each restores the cap it replaced).
+// allocation_limit.cpp) refuses any single allocation over the cap with std::bad_alloc before
+// asking for the memory; the reader reports the file as unreadable, naming the size it claimed.
+// Scopes nest. Not enforced under ThreadSanitizer, whose runtime defines operator new itself.
 #pragma once
 
 #include <cstddef>

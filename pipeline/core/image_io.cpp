@@ -40,12 +40,9 @@ void writeExr(const Image& image, const std::string& path, const std::vector<std
             throw Error("writeExr: " + path + ": channel name count does not match the image");
         spec.channelnames = channelNames;
     }
-    // Run-length: a bake's float images hold noise in their low bits that zip cannot squeeze
-    // (a 256² lightmap 720 kB zipped, 786 kB raw, 755 kB run-length), and zip took 9 ms a file
-    // against 3 ms (OpenImageIO 2.4 writing a 256² RGB float image, fastest of 5). The write
-    // stage of `build/voxlight bake ../shared/reference/cornell_quad.gltf --grids false` went
-    // 60 → 36 ms (bake.json); the pixels are the same, lossless both. Runs still fold masks'
-    // and padding's flat spans.
+    // Run-length: a bake's float images hold noise in their low bits that zip cannot squeeze,
+    // so zip costs time for almost no bytes; both are lossless, and runs still fold masks' and
+    // padding's flat spans (docs/decisions.md, "Image compression").
     spec.attribute("compression", "rle");
     // OpenImageIO stamps an EXR with the time it was written (capDate) unless told one: an empty
     // one keeps a bake's files the same bytes from run to run.
@@ -66,8 +63,8 @@ void writePngSrgb(const Image& image, const std::string& path) {
                     static_cast<uint8_t>(std::lround(std::min(v, 1.0f) * 255.0f));
             }
     OIIO::ImageSpec spec(image.width, image.height, outChannels, OIIO::TypeDesc::UINT8);
-    // zlib level 3: the Cornell box's 256² image.png in 4 ms and 41 kB, against 10 ms and 35 kB
-    // at the default 6 (OpenImageIO 2.4, fastest of 5); the same pixels.
+    // zlib level 3, not the default 6: much faster for slightly larger files, the
+    // same pixels (docs/decisions.md, "Image compression").
     spec.attribute("png:compressionLevel", 3);
     writeWith(path, spec, bytes.data());
 }

@@ -21,23 +21,15 @@ namespace vl {
 
 struct DirectLightSettings {
     // n: n × n visibility points per emissive triangle, ⌈n√2⌉² per parallelogram quad (36 at
-    // 4, 64 at 5), only in penumbrae. 4: the Cycles quad box's lightmap holds issue 13's 3% at
-    // each of 16 random turns (2.45–2.98%, `build/accuracy/accuracy_rotations`, 2026-11-27),
-    // and its bench times are 5% / 7% under n = 5's (lightmap / image, `voxlight bench --vct ''
-    // --vct emitter-strata=4`), for errors 2.54% / 4.19% against 2.49% / 4.15%: less error²
-    // × time for both. n = 5 was the default while the gather points' placement left a turn
-    // at 3.09% with n = 4.
+    // 4, 64 at 5), only in penumbrae. 4: the lowest that keeps the accuracy target at every
+    // turn of the scene, for less error² × time than 5 (docs/decisions.md, "Emitter strata").
     int emitterStrata = 4;
     // m: m × m stratified cosine-weighted directions per receiver sample that look for the
-    // sky (Scene::sky). On the open Cycles Cornell box under a uniform sky (lightmap 70%
-    // direct) m = 8 / 10 / 12 / 16 give the lightmap 5.6% / 4.2% / 3.5% / 2.7% relative RMSE
-    // and the image 3.9% / 3.2% / 3.0% / 2.7%, the lightmap-only bake 0.33 / 0.39 / 0.48 /
-    // 0.64 s (`voxlight bench ../shared/reference/cornell_sky.gltf --sky 0.6,0.75,1.0
-    // --reference-… --vct 'sky-strata=M'`, 2026-11-27): 10 holds issue 16's 5% in about the
-    // time the speed issue's default took (0.39 s).
+    // sky (Scene::sky). 10: the fewest that hold the sky's accuracy target on an open box
+    // (docs/decisions.md, "Sky strata").
     int skyStrata = 10;
     // false: the sky is left out here, for receivers that gather it with their indirect light
-    // (a lightmap's records, bake/texel_gather.h).
+    // (a lightmap's records, gather/texel_gather.h).
     bool skyAtSamples = true;
     // How many nodes a receiver sample's cut of a tree of many lights takes, per tree
     // (trace/light_tree.h): the nearer and brighter lights alone and exact, the rest sampled.
@@ -69,10 +61,9 @@ VL_HOSTDEV inline float geometricFactor(const vec3& p, const vec3& ng, const vec
 // Where all seven are seen, or all hidden, it is taken as wholly seen or wholly hidden and
 // the strata are not traced: most receivers see an emitter whole or not at all, and a shadow
 // edge crossing a triangle leaves test points on both sides of it. Only penumbrae, and
-// occluders small enough to hide between the seven points, take the n × n strata. Measured
-// on the Cycles quad box: the lightmap's direct error is the same as with every stratum
-// traced (2.16%), from 7 shadow rays instead of 16 per triangle where the light is unshadowed
-// (corners and centroid alone missed the corners of the blocks' shadows: 2.36%).
+// occluders small enough to hide between the seven points, take the n × n strata: the error of
+// tracing every stratum for far fewer shadow rays, where corners and centroid alone miss the
+// corners of shadows (docs/decisions.md, "Emitter strata").
 VL_HOSTDEV inline vec3 emitterIrradiance(const TraceSceneView& s, const BvhView& bvh, uint32_t emitter, const vec3& p,
                                          const vec3& ng, const vec3& ns, int strata, uint64_t seed, uint64_t stream) {
     const vec3* v = s.vertices + 3 * static_cast<size_t>(emitter);
@@ -141,10 +132,9 @@ VL_HOSTDEV inline vec3 emitterIrradiance(const TraceSceneView& s, const BvhView&
 // lie on one m × m grid of square strata, m = ⌈n·√2⌉ (about the 2·n² points its halves
 // would take). Two n × n grids warped onto the triangles (sampleUniformTriangle) place their
 // strata less evenly than one grid of the quad, and a penumbra's error is what the strata
-// leave uneven: on the Cycles quad box the lightmap's direct error falls from 2.17% to 1.88%
-// at n = 4, with 36 points where the halves took 32 (test_bake "The default bake of the Cycles Cornell
-// boxes*" -s). The wholly-seen test takes the quad's corners, edge midpoints and centre (9
-// points for its halves' 14).
+// leave uneven, so one grid gives less error for about the same points (docs/decisions.md,
+// "Emitter strata"). The wholly-seen test takes the quad's corners, edge midpoints and centre
+// (9 points for its halves' 14).
 VL_HOSTDEV inline vec3 emitterQuadIrradiance(const TraceSceneView& s, const BvhView& bvh, uint32_t first, const vec3& p,
                                              const vec3& ng, const vec3& ns, int strata, uint64_t seed, uint64_t stream) {
     const uint32_t halves[2] = {s.emitters[first], s.emitters[first + 1]};

@@ -51,15 +51,14 @@ enum class VoxelVisibility {
 
 struct LightingSettings {
     // Rays by default: a walk through the voxels sees thin occluders (window frames, mullions)
-    // as partly open and weighs them down with distance; on the grey-white room's sun the
-    // stepping pass reflected 1.28 times the exact light (docs/accuracy.md).
+    // as partly open and weighs them down with distance, so a sun through a window brings
+    // too much light (docs/accuracy.md, "Where the light was wrong, and why").
     VoxelVisibility visibilityBy = VoxelVisibility::Rays;
     // By rays: about this many surface points per h² of each triangle's area (surface_points.h).
     int surfacePoints = 4;
     // Lambert by default: it is exact on a flat surface of any orientation. Six-axis keeps a
-    // 90° corner's total but lights a tilted wall by 1/‖n‖₁ of its cosine: a turned closed
-    // room kept 70–76 % of its indirect power with it, 91–101 % with Lambert; on the
-    // axis-aligned Cycles Cornell boxes the two differ by 0.1 point (README).
+    // 90° corner's total but lights a tilted wall by 1/‖n‖₁ of its cosine, so a turned room
+    // loses indirect power (docs/decisions.md, "Normal weighting").
     NormalWeighting normalWeights = NormalWeighting::Lambert;
     VisibilityTraversal traversal = VisibilityTraversal::Hdda;
     // Punctual-light falloff. Unset: glTF physical inverse square with the KHR_lights_punctual
@@ -71,11 +70,8 @@ struct LightingSettings {
     // through n×n stratified points of its own per voxel; its unshadowed light is exact
     // (Lambert's polygon formula), so the points only shape penumbrae, and what they miss is
     // noise from voxel to voxel that the bounces' gathers average. One suffices by default:
-    // on the Cycles quad box n = 1, 2 give lightmap 2.6%, 2.5% relative RMSE (indirect 5.2%,
-    // 4.9%) and take 0.043, 0.127 s in the voxel light stage (2 cores; errors from
-    // `build/voxlight bench --methods vct --vct '' --vct 'voxel-emitter-strata=2'`, times from
-    // the bake.json of `build/voxlight bake ../shared/reference/cornell_quad.gltf
-    // --voxel-emitter-strata N --images false`, fastest of 3).
+    // more barely lowers the error and multiplies the voxel light stage's time
+    // (docs/decisions.md, "Emitter strata").
     int emitterStrata = 1;
     // false: V = 0 everywhere (unshadowed lighting; the benchmark's "no stepping" peer).
     bool visibility = true;

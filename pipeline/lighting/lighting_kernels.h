@@ -4,41 +4,9 @@
 // Positions here are in index space (voxel units): voxel (i, j, k) is centred at (i, j, k)
 // and spans [i − ½, i + ½] on each axis. Distances for attenuation are converted to metres.
 //
-// Visibility (ERRATA eq. 17). A ray leaves the receiving voxel toward the light and visits,
-// in order, every voxel it passes through (Amanatides–Woo). Each visited occupied voxel k
-// adds w_k·α_k·(1 − V) with w_k = min(1, 1/(i·d)), where i·d is the distance along the ray
-// from the receiver's centre to the voxel's centre (the projection; exactly i for a ray
-// along an axis, i·√2 along a face diagonal), and a solid voxel makes V = 1. The voxel that
-// holds the light's end point is not between receiver and light and is never visited.
-//
-// Self-occlusion. A voxel averages the surface inside it, and the voxels of the same surface
-// lie beside it, so a ray from the centre toward a grazing light would cross its own
-// surface's neighbours. Two rules keep a surface from shadowing itself:
-//  * the ray starts off the voxel's own box, at c + (½‖n‖₁ + ε)·n along the unit lit-side
-//    normal n (for a floor, on the top face: it then lives in the layer above and cannot pass
-//    under a wall standing on that floor);
-//  * a voxel whose centre lies less than ‖n‖₁ above the receiver's centre along n belongs to
-//    the receiver's surface layer (the voxels a plane through the receiver can touch) and
-//    does not occlude it. For an axis-aligned plane that is exactly its own layer; the layer
-//    above (height 1) does occlude.
-// The emitter end of a ray to an emissive-triangle sample is treated alike: voxels whose
-// centres lie within ½‖n_e‖₁ of the emitter's plane on its front are the emitter's own
-// surface. An emitter sample inside the receiver's surface layer itself (less than ‖n‖₁
-// above its centre) is not light the receiver shows: an emitter that close lies against the
-// surface and covers the part it would light (a ceiling light mounted flat under the
-// ceiling, its back face lighting the ceiling it hides), and the voxels that hold both show
-// the emitter's side, not the hidden ceiling. Lit anyway, the ceiling above a double-sided
-// quad light glowed through the light's voxels: 14 % of the Cornell box floor's first-bounce
-// light came from it, where the path tracer has none.
-//
-// Empty-space skipping (HDDA). The DDA's state is only the integer voxel coordinate; every
-// plane-crossing time is computed from it afresh, never accumulated. Leaping an empty NanoVDB
-// node (no leaf there) therefore lands on exactly the voxel the one-voxel DDA would reach
-// when it leaves that node (the merge of the three axes' crossing sequences is solved
-// directly), so both traversals visit the same active voxels in the same order and give the
-// same bits. nanovdb::HDDA accumulates its crossing times and nudges them forward by an
-// epsilon, which breaks that agreement at voxel edges and corners; this is its hierarchical
-// idea over the same tree (ReadAccessor::getDim), made exact.
+// Visibility steps through the voxels' opacity (ERRATA eq. 17), with two rules that keep a
+// surface from shadowing itself, and leaps empty nodes without changing a bit of the result:
+// "Visibility stepping" below says how.
 #pragma once
 
 #include "core/hostdev.h"
@@ -87,9 +55,8 @@ struct KernelLight {
 // sees the penumbra through points of its own, so what the few points miss is noise from
 // voxel to voxel, which the bounces' gathers average, and not the hard shadow of one fixed
 // point shared by every voxel. With the points fixed per triangle, a quad light sampled
-// once per patch was a point light for the bounces: the Cycles quad box's lightmap error
-// went 2.8% → 5.6% (indirect 5.4% → 11.9%; `voxlight bench --vct ''`). A textured patch
-// keeps its fixed samples (emitterSamples), where its texture was read.
+// once per patch is a point light for the bounces (docs/decisions.md, "Emitter strata"). A
+// textured patch keeps its fixed samples (emitterSamples), where its texture was read.
 struct EmitterTriangle {
     vec3 v0{0.0f}, v1{0.0f}, v2{0.0f};  // index space
     vec3 normal{0.0f, 0.0f, 1.0f};      // unit, front face (counter-clockwise)
@@ -278,6 +245,42 @@ VL_HOSTDEV inline vec3 punctualIrradiance(const KernelLight& light, const vec3& 
 
 // ---------------------------------------------------------------------------------------
 // Visibility stepping.
+//
+// Visibility (ERRATA eq. 17). A ray leaves the receiving voxel toward the light and visits,
+// in order, every voxel it passes through (Amanatides–Woo). Each visited occupied voxel k
+// adds w_k·α_k·(1 − V) with w_k = min(1, 1/(i·d)), where i·d is the distance along the ray
+// from the receiver's centre to the voxel's centre (the projection; exactly i for a ray
+// along an axis, i·√2 along a face diagonal), and a solid voxel makes V = 1. The voxel that
+// holds the light's end point is not between receiver and light and is never visited.
+//
+// Self-occlusion. A voxel averages the surface inside it, and the voxels of the same surface
+// lie beside it, so a ray from the centre toward a grazing light would cross its own
+// surface's neighbours. Two rules keep a surface from shadowing itself:
+//  * the ray starts off the voxel's own box, at c + (½‖n‖₁ + ε)·n along the unit lit-side
+//    normal n (for a floor, on the top face: it then lives in the layer above and cannot pass
+//    under a wall standing on that floor);
+//  * a voxel whose centre lies less than ‖n‖₁ above the receiver's centre along n belongs to
+//    the receiver's surface layer (the voxels a plane through the receiver can touch) and
+//    does not occlude it. For an axis-aligned plane that is exactly its own layer; the layer
+//    above (height 1) does occlude.
+// The emitter end of a ray to an emissive-triangle sample is treated alike: voxels whose
+// centres lie within ½‖n_e‖₁ of the emitter's plane on its front are the emitter's own
+// surface. An emitter sample inside the receiver's surface layer itself (less than ‖n‖₁
+// above its centre) is not light the receiver shows: an emitter that close lies against the
+// surface and covers the part it would light (a ceiling light mounted flat under the
+// ceiling, its back face lighting the ceiling it hides), and the voxels that hold both show
+// the emitter's side, not the hidden ceiling. Lit anyway, the ceiling above a double-sided
+// quad light glows through the light's voxels and lights the floor where the path tracer
+// has nothing (docs/decisions.md, "Voxel self-occlusion").
+//
+// Empty-space skipping (HDDA). The DDA's state is only the integer voxel coordinate; every
+// plane-crossing time is computed from it afresh, never accumulated. Leaping an empty NanoVDB
+// node (no leaf there) therefore lands on exactly the voxel the one-voxel DDA would reach
+// when it leaves that node (the merge of the three axes' crossing sequences is solved
+// directly), so both traversals visit the same active voxels in the same order and give the
+// same bits. nanovdb::HDDA accumulates its crossing times and nudges them forward by an
+// epsilon, which breaks that agreement at voxel edges and corners; this is its hierarchical
+// idea over the same tree (ReadAccessor::getDim), made exact.
 
 struct RayEnd {
     vec3 point{0.0f};
@@ -446,10 +449,10 @@ VL_HOSTDEV inline float visibilityLoss(const LightingView& view, IndexAccessor& 
 // seeded (voxelInPatchFrame) by where the voxel lies in the patch's own frame (its first
 // triangle's first edge, the normal), rounded to half voxels, not by the voxel's index or grid
 // coordinate: a scene turned a quarter turn, moved or scaled then lights each voxel through
-// the same points (seeded by the index, a quarter turn moved the Cycles quad box's indirect
-// light by 1%). Two voxel centres differ by at least 1/√3 > ½ along some axis of any frame,
-// so no two voxels share a seed. The salt is the textured emitters' fixed samples' too
-// (lighting.cpp).
+// the same points (seeded by the index, a quarter turn moves the bake: docs/decisions.md,
+// "The scene's own frame"). Two voxel centres differ by at least 1/√3 > ½ along some axis of
+// any frame, so no two voxels share a seed. The salt is the textured emitters' fixed
+// samples' too (lighting.cpp).
 constexpr uint64_t kEmitterJitterSalt = 0x4C49474854ull;  // "LIGHT"
 
 VL_HOSTDEV inline uint64_t voxelInPatchFrame(const EmitterTriangle& first, const vec3& voxel) {
@@ -599,7 +602,7 @@ VL_HOSTDEV inline VoxelLighting shadeVoxel(const LightingView& view, IndexAccess
                 float V = 0.0f;
                 if (view.visibility &&
                     glm::dot(w.litNormal, sample.position - receiver) < normL1(w.litNormal) - kLayerTolerance) {
-                    V = 1.0f;  // the emitter lies in the receiver's surface layer: see the header
+                    V = 1.0f;  // the emitter lies in the receiver's surface layer: see "Visibility stepping"
                 } else if (view.visibility) {
                     RayEnd end;
                     end.point = sample.position;

@@ -3,14 +3,13 @@
 // VoxelScene::faceRadiance, per face the light its side reflects, albedo/π × the area-mean of
 // the direct irradiance over the side's points (lighting/direct_light.h surfacePointIrradiance:
 // lights, a sun's disk, emitters; and the sky, skyIrradiance, by skyStrata² rays a point),
-// VoxelScene::radiance their
-// faceWeightedMean and VoxelScene::occlusion the share of the points' shadow rays that were
-// blocked.
+// VoxelScene::radiance their faceWeightedMean and VoxelScene::occlusion the share of the
+// points' shadow rays that were blocked.
 //
 // Why, beside the stepping pass of lighting.h (ERRATA eq. 17): a visibility walk through the
 // voxels sees thin occluders (window frames, mullions) as partly open voxels, weighted down by
-// their distance, and evaluates a voxel at one point. On the grey-white room's sun the voxels
-// reflected 1.28 times the exact light (docs/accuracy.md, build/accuracy/accuracy_voxel_light).
+// their distance, and evaluates a voxel at one point, so a sun through a window brings too
+// much light (docs/accuracy.md, "Where the light was wrong, and why").
 #pragma once
 
 #include "lighting/surface_points.h"

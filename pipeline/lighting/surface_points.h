@@ -5,7 +5,7 @@
 //
 // Why: a voxel averages the surface inside it, but light arrives at the surface: a voxel side's
 // direct light is the area-mean of the exact irradiance over these points (surface_light.h),
-// and the final gather samples the bright sides' light at them (bake/bright_patches.h), with
+// and the final gather samples the bright sides' light at them (gather/bright_patches.h), with
 // shadow rays against the triangles that end on the surface itself.
 #pragma once
 

@@ -441,10 +441,9 @@ private:
 
     // A rotation's matrix with the entries that lie within rounding of 0 or ±1 made exact. A
     // quarter turn written as a quaternion of √½ components comes out of it with 2·10⁻¹⁶ where
-    // 0 belongs, which moved a wall lying on a voxel boundary into the voxel beside it: the
-    // Cornell box under a node turned a quarter about X baked 0.53% away from the untouched
-    // one in its indirect light, and 0.035% turned exactly in memory. Entries of any other
-    // rotation are farther than 10⁻¹² from 0 and ±1 (a turn of 10⁻⁶ rad has 10⁻⁶ there).
+    // 0 belongs, which moves a wall lying on a voxel boundary into the voxel beside it
+    // (docs/decisions.md, "Exact quarter turns"). Entries of any other rotation are farther
+    // than 10⁻¹² from 0 and ±1 (a turn of 10⁻⁶ rad has 10⁻⁶ there).
     static glm::dmat4 exactQuarterTurns(glm::dmat4 m) {
         for (int c = 0; c < 3; ++c)
             for (int r = 0; r < 3; ++r) {

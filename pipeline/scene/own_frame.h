@@ -6,10 +6,8 @@
 // the walls whatever the turn.
 //
 // Why: walls at an angle to the grid cross its voxels in staircases, and the voxel bake's
-// error against Cycles depends on that alignment. Over sixteen random turns of the Cycles
-// Cornell boxes at 63 voxels the quad box's lightmap error ran 2.75–3.72% against 2.69%
-// unturned (build/accuracy/accuracy_rotations, gather-level 2, 2026-11-27); a grid along the
-// box's own axes bakes every turn as the unturned box.
+// error against Cycles depends on that alignment; a grid along the scene's own axes bakes
+// every turn as the unturned scene (docs/decisions.md, "The scene's own frame").
 #pragma once
 
 #include "scene/scene.h"
@@ -17,11 +15,9 @@
 namespace vl {
 
 // Own axes less than this far from the local axes are taken as them. Why: a wall 0.5° off an
-// axis steps by one voxel across 115 voxels, less than the scene's own modelling (the classic
-// Cornell box's walls are up to 0.08° out of square), and a turn that small changed only which
-// voxel walls lying on voxel faces fall in: the classic box's bake moved by 1.5% in its
-// indirect light between its quarter turns, which find its skew along other walls
-// (`build/tests/test_bake "The bake does not change*"` with no minimum turn).
+// axis steps by one voxel across 115 voxels, no more than a modelled scene's own skew, and a
+// turn that small changes only which voxel walls lying on voxel faces fall in
+// (docs/decisions.md, "The scene's own frame").
 constexpr double kOwnFrameMinTurn = 0.5 * 3.14159265358979323846 / 180.0;  // radians
 
 // The own frame's axes in `scene`'s local frame (columns), a rotation: column k is the own

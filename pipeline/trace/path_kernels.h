@@ -9,11 +9,7 @@
 // bounce `rouletteStart` on, survival probability min(1, max throughput). A path that leaves
 // the scene sees the sky (TraceSceneView::sky): its uniform part by BSDF sampling alone,
 // its image also by a direction drawn from the image at every diffuse vertex, the two
-// combined by the power heuristic.
-//
-// Bounce counting follows Cycles: max bounces B means light scattered at most B + 1 times
-// on its way to the sensor (B = 0 is direct light only). "Direct" is light scattered once
-// (emitters seen by the camera count as direct too); "indirect" is everything else.
+// combined by the power heuristic. Bounces are counted as Cycles counts them (PathSettings).
 #pragma once
 
 #include "core/rng.h"
@@ -26,6 +22,9 @@
 
 namespace vl {
 
+// Bounce counting follows Cycles: max bounces B means light scattered at most B + 1 times
+// on its way to the sensor (B = 0 is direct light only). "Direct" is light scattered once
+// (emitters seen by the camera count as direct too); "indirect" is everything else.
 struct PathSettings {
     int maxBounces = 64;
     int rouletteStart = 5;      // first bounce (vertex index, 0 = first hit) where roulette may end a path

@@ -75,8 +75,8 @@ VL_HOSTDEV inline vec3 skyRadianceAlong(const SkyView& sky, const vec3& d) {
 }
 
 // First index whose inclusive CDF value exceeds u (the last where rounding leaves none).
-// Branch-free halving (a conditional move per step): the branchy search's mispredictions
-// were a fifth of the receivers' time under an image sky (perf annotate).
+// Branch-free halving (a conditional move per step): a branchy search's mispredictions cost
+// the receivers much of their time under an image sky (docs/decisions.md, "Sky sampling").
 VL_HOSTDEV inline int searchCdf(const float* cdf, int n, float u) {
     int base = 0;
     for (int length = n; length > 1;) {

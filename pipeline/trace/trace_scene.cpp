@@ -227,9 +227,8 @@ TraceScene TraceScene::build(const Scene& scene, const SceneTriangles& triangles
         // pixel's luminance is the most the bilinear lookup shows anywhere inside it: at its
         // centre, its edges' middles or its corners, where it blends its neighbours. Drawn by
         // its own value, a pixel next to the sun was drawn as seldom as the sky around it
-        // while it shows up to half the sun, and a receiver's cosine rays that hit it came
-        // out 170% high (an open floor under a 4° sun: texels 2.2% RMS, 7.6% at worst with the
-        // bound; 2.4% / 8.7% with the brightest of the 3 × 3, 3.6% / 18% with their mean).
+        // while it shows up to half the sun, and a receiver's cosine rays that hit it came out
+        // far too high (docs/decisions.md, "Sky sampling").
         const size_t w = size_t(image.width), h = size_t(image.height);
         std::vector<float> lum(w * h);
         for (size_t k = 0; k < w * h; ++k) lum[k] = glm::max(0.0f, luminance(image.texels[k]));

@@ -27,8 +27,8 @@ namespace {
 // read back from TEXCOORD_1 lands in the padding.
 constexpr double kChartInset = 1.0 / 256.0;
 constexpr float kTouchSlack = 1.0f / 512.0f;
-// The texel size by profiles is searched within [kProfileBracket, 1] of the rectangles' (on
-// zdm2 it comes out at 0.93 of it) in kProfileSteps bisections: to 0.6% of it.
+// The texel size by profiles is searched within [kProfileBracket, 1] of the rectangles' in
+// kProfileSteps bisections: to 0.6% of it.
 constexpr double kProfileBracket = 0.8;
 constexpr int kProfileSteps = 5;
 // A merge may leave the union's bounding rectangle, in texels with its padding at the texel
@@ -43,13 +43,13 @@ constexpr double kMergeLengthGrowth = 1.05;
 // start, so the solve mostly has to settle the seam between them.
 constexpr int kMergeIterations = 400;
 // A merge's solve gives up after this many steps while its stretch is above this many times
-// the bound: such solves seldom end within it, and letting each run its course nearly doubled
-// the UV time for a few more merges (docs/atlas.md).
+// the bound: such solves seldom end within it, and letting each run its course costs much UV
+// time for a few more merges (docs/atlas.md).
 constexpr int kHopelessSteps = 32;
 constexpr double kHopelessStretch = 1.15;
 // The whole union is solved only where the layout with big's vertices held stretches less than
-// this many times the bound (and folds nothing): of the solves that started further off, 8 in
-// 1,920 on MetalRoughSpheresNoTextures and 58 in 1,745 on the grey-white room came within it.
+// this many times the bound (and folds nothing): few of the solves that start further off come
+// within it (docs/atlas.md, "How the charts are made").
 constexpr double kFullSolveStretch = 1.5;
 
 // One mesh's triangles, welded by position (glTF splits vertices at every seam of their other
@@ -161,8 +161,8 @@ double area2d(const vec2 (&p)[3]) {
 // by more than `slack` (triangles that share an edge or a corner only touch). In double,
 // about a's first corner: with coordinates metres from the origin, dot products in floats err
 // by 1e-7 m, more than the slack, so two triangles sharing an edge could read as overlapping
-// (the grey-white room's cushions, 6 mm triangles 2 m from the origin, came out in thousands
-// of one-triangle charts: 8,519 in the room, 5,072 without that).
+// (small triangles far from the origin then come out as thousands of one-triangle charts:
+// docs/atlas.md).
 bool overlapIn2d(const vec2 (&a)[3], const vec2 (&b)[3], float slack) {
     // Boxes apart by more than the slack: apart (most pairs a grid cell holds).
     const vec2 loA = glm::min(a[0], glm::min(a[1], a[2])), hiA = glm::max(a[0], glm::max(a[1], a[2]));
@@ -197,8 +197,7 @@ bool overlapIn2d(const vec2 (&a)[3], const vec2 (&b)[3], float slack) {
 // Flattened triangles bucketed by a grid of cells about twice a triangle's size, to find the
 // ones a new triangle would overlap. A triangle spanning more than kMaxCells cells (a wall's
 // two triangles among a cushion's thousands) is kept in a list of its own that every query
-// scans, and a query that large scans every triangle: nvpro's Cornell box spent seconds
-// filling cells.
+// scans, and a query that large scans every triangle: filling its cells would cost more.
 class OverlapGrid {
 public:
     explicit OverlapGrid(float cell) : cell_(std::max(cell, 1e-12f)), slack_(1e-5f * cell_) {}
@@ -263,8 +262,8 @@ std::vector<Chart> growCharts(const Topology& topo, uint32_t meshIndex) {
     std::vector<Chart> charts;
     std::vector<uint32_t> queue;
     // A chart refuses a triangle whose projection would overlap one it holds (a surface that
-    // folds back under itself within the cone: zdm2 had 6,886 overlapping sub-texel points
-    // without this); the refused triangle starts or joins another chart.
+    // folds back under itself within the cone: docs/atlas.md); the refused triangle starts or
+    // joins another chart.
     double totalArea = 0.0;
     for (float a : topo.area) totalArea += a;
     OverlapGrid grid(2.0f * std::sqrt(float(totalArea / double(std::max<size_t>(triangles, 1)))));
@@ -441,13 +440,13 @@ Chart chartPart(const Topology& topo, const Chart& chart, const std::vector<int3
 }
 
 // A chart whose rectangle is more than half empty (the top of a skirting board running round
-// a room is a frame of 1% fill, and profiles only nest charts from above, so nothing lands in
-// its middle) is cut in two: the triangles nearer (along the chart) to one or the other of two
-// triangles far apart, the first at one end of its rectangle's long side, the second the
-// farthest from it; each part is cut again while it is more than half empty. The parts replace
-// the chart where their rectangles, padding included at texel size s, take fewer texels than
-// its own. A straight cut across the rectangle does not free a frame whose sides are each one
-// long triangle: every cut has a side's triangle spanning it.
+// a room is a frame almost all empty, and profiles only nest charts from above, so nothing
+// lands in its middle) is cut in two: the triangles nearer (along the chart) to one or the
+// other of two triangles far apart, the first at one end of its rectangle's long side, the
+// second the farthest from it; each part is cut again while it is more than half empty. The
+// parts replace the chart where their rectangles, padding included at texel size s, take fewer
+// texels than its own. A straight cut across the rectangle does not free a frame whose sides
+// are each one long triangle: every cut has a side's triangle spanning it.
 void splitWasteful(const Topology& topo, Chart chart, double s, std::vector<Chart>& out) {
     const Rectangle rectangle = smallestRectangle(chart.coords);
     const size_t n = chart.triangles.size();
@@ -770,8 +769,7 @@ private:
 // Skyline packing (bottom-left) of the charts' rectangles at texel size s (world units per
 // texel); false when they do not fit. Charts are taken tallest first, each laid flat (its
 // longer side across), each where its top lands lowest, then leftmost. Shelves left the gap
-// over every chart lower than its shelf's first: charts took 49% of the atlas on nvpro's
-// Cornell box and 37% on zdm2, against 58% and 40% by the skyline.
+// over every chart lower than its shelf's first, and packed less (docs/atlas.md).
 bool pack(std::vector<Chart>& charts, const std::vector<uint32_t>& order, double s, int width, int height) {
     struct Segment {
         int x, y, width;

@@ -1,42 +1,12 @@
 // Lightmap UVs for meshes that have none: takes a Scene, the meshes lacking TEXCOORD_1 and an
 // atlas (a size in texels, or a texel size), gives each of those meshes a TEXCOORD_1 (uv1) in
-// one shared atlas.
+// one shared atlas, at one world-space texel size for the whole scene.
 //
-// Charts, in three steps:
-// - Grown: triangles joined across shared edges (positions welded exactly) while their normal
-//   stays within kChartAngleDegrees of the chart's first (largest) triangle, so projecting the
-//   chart flat along that normal stretches no triangle's area by more than 1/cos of it, and
-//   while their projection overlaps none the chart holds (a surface folding back under itself
-//   within the cone starts another chart).
-// - Cut: a chart whose rectangle is more than half empty (a frame round a room) is cut in two
-//   along itself, again and again, where the parts pack into fewer texels.
-// - Merged: neighbouring charts become one where the union, flattened conformally
-//   (unwrap/flatten.h), keeps every triangle's area stretch within the same bound, folds no
-//   triangle over and overlaps nothing, and its bounding rectangle, padding included, is
-//   little larger than its parts' and no longer than kMergeLengthShare allows. Greedy growth
-//   on a smooth but curved surface (the grey-white room's cushions) left pockets between the
-//   cones as charts of their own, each with its padding; a strip folded smoothly off a face (a
-//   rounded edge) unfolds into it with no stretch at all. Smaller charts merge first, each
-//   with the neighbour it shares the longest edge with. Charts that meet at a hard crease
-//   (kMergeFoldDegrees) stay apart unless the atlas cannot afford it (kCreaseTexelCost).
-// A chart still under kSmallChartTexels along a side at the texel size packed is reported.
-//
-// Each chart is turned to its smallest bounding rectangle and packed at one world-space texel
-// size for the whole scene (density uniform in world units): for an atlas of a given size the
-// smallest that fits, searched by bisection (rectangles (skyline) bracket it, then the charts'
-// own texel footprints dropped column by column ("profiles", in four orientations) refine it,
-// so triangular charts nest); for a texel size, the smallest square atlas (a multiple of 4
-// texels a side) that holds them. Every chart keeps kPaddingTexels empty texel on each side,
-// so two charts' texels have at least 2 empty texels between them (issue 14's padding): a
-// bilinear lookup at a chart's edge reaches one texel out, which the bake's dilation fills
-// from that chart alone; two a side would cost a small atlas much of its coverage. Vertices
-// shared by two charts are split (every attribute copied; Mesh::Source::vertices says where
-// each came from, for glTF out).
-//
-// Why not Blender's Lightmap Pack (one chart per face): a wall of two triangles is then two
-// islands with a seam of padding through it, at a texel density that varies from face to
-// face (sixfold on nvpro's Cornell box), and it took 638 s on zdm2 against 2 s here.
-// Measurements of the charts: docs/atlas.md.
+// Charts are grown by normal, cut where their rectangle is mostly empty, merged where a
+// conformal flattening keeps the same stretch bound, and packed; generateLightmapUvs says
+// how. Why not Blender's Lightmap Pack (one chart per face): a wall of two triangles is then
+// two islands with a seam of padding through it, at a texel density that varies from face to
+// face, and it is far slower. Measurements of the charts: docs/atlas.md.
 #pragma once
 
 #include "scene/scene.h"
@@ -51,7 +21,7 @@ constexpr float kChartAngleDegrees = 30.0f;
 // kMergeFoldDegrees and whose vertex normals there differ by more than kSmoothShadingDegrees,
 // do not merge: a bilinear read near the fold would mix the light of both faces (a sunlit
 // sill's top into its shaded front), and a texel on the fold would hold their mean. The bake's
-// seams (bake/lightmap_seams.h) call an edge smooth by the same normals.
+// seams (lightmap/lightmap_seams.h) call an edge smooth by the same normals.
 constexpr float kMergeFoldDegrees = 45.0f;
 constexpr float kSmoothShadingDegrees = 15.0f;
 // Where keeping charts apart at hard creases makes the texels coarser than this many times the
@@ -104,6 +74,37 @@ struct LightmapUvReport {
     double seconds = 0.0;
 };
 
+// Charts, in three steps:
+// - Grown: triangles joined across shared edges (positions welded exactly) while their normal
+//   stays within kChartAngleDegrees of the chart's first (largest) triangle, so projecting the
+//   chart flat along that normal stretches no triangle's area by more than 1/cos of it, and
+//   while their projection overlaps none the chart holds (a surface folding back under itself
+//   within the cone starts another chart).
+// - Cut: a chart whose rectangle is more than half empty (a frame round a room) is cut in two
+//   along itself, again and again, where the parts pack into fewer texels.
+// - Merged: neighbouring charts become one where the union, flattened conformally
+//   (unwrap/flatten.h), keeps every triangle's area stretch within the same bound, folds no
+//   triangle over and overlaps nothing, and its bounding rectangle, padding included, is
+//   little larger than its parts' and no longer than kMergeLengthShare allows. Greedy growth
+//   on a smooth but curved surface (the grey-white room's cushions) left pockets between the
+//   cones as charts of their own, each with its padding; a strip folded smoothly off a face (a
+//   rounded edge) unfolds into it with no stretch at all. Smaller charts merge first, each
+//   with the neighbour it shares the longest edge with. Charts that meet at a hard crease
+//   (kMergeFoldDegrees) stay apart unless the atlas cannot afford it (kCreaseTexelCost).
+// A chart still under kSmallChartTexels along a side at the texel size packed is reported.
+//
+// Each chart is turned to its smallest bounding rectangle and packed at one world-space texel
+// size for the whole scene (density uniform in world units): for an atlas of a given size the
+// smallest that fits, searched by bisection (rectangles (skyline) bracket it, then the charts'
+// own texel footprints dropped column by column ("profiles", in four orientations) refine it,
+// so triangular charts nest); for a texel size, the smallest square atlas (a multiple of 4
+// texels a side) that holds them. Every chart keeps kPaddingTexels empty texel on each side,
+// so two charts' texels have at least 2 empty texels between them (issue 14's padding): a
+// bilinear lookup at a chart's edge reaches one texel out, which the bake's dilation fills
+// from that chart alone; two a side would cost a small atlas much of its coverage. Vertices
+// shared by two charts are split (every attribute copied; Mesh::Source::vertices says where
+// each came from, for glTF out).
+//
 // Gives the meshes `meshes` (indices into scene.meshes) that have triangles a uv1 in one atlas
 // as `atlas` asks (the caller bakes at report.width × height). A uv1 those meshes already have
 // is replaced, and other meshes are left as they are: the caller decides which to unwrap.

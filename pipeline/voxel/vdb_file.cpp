@@ -73,9 +73,9 @@ std::size_t parseAllocationBound(const std::string& path) {
 
 // Every grid of the file and its metadata, guarded against what a file can claim.
 // - OpenVDB's readers loop over counts read from the file and look at the stream only
-//   afterwards: a 10 kB file claiming 2^32 root tiles kept io::File reading past its end for
-//   13 s. Here the stream throws at its first failed read (io::Stream takes our stream; io::File
-//   opens its own).
+//   afterwards, so a small file claiming a huge count keeps io::File reading past its end
+//   (docs/decisions.md, "Allocation cap"). Here the stream throws at its first failed read
+//   (io::Stream takes our stream; io::File opens its own).
 // - OpenVDB allocates the lengths it reads (a metadata string, a compressed block) before
 //   reading them: its calls run under an AllocationLimit of the file's size, so a length
 //   claimed beyond it is refused before it is allocated, naming its size.

@@ -417,8 +417,9 @@ double voxelSizeFor(const Scene& scene, const VoxelSettings& settings) {
             throw InputError(sceneLabel(scene) + ": the scene's bounds are a single point; give a voxel size");
         // An odd count: with the box centred on a voxel corner (anchorToVoxelGrid) the box's
         // faces along its longest axis then fall on voxel centres, not on the faces between
-        // two voxels, where rounding puts a wall in one voxel layer or both (a scaled or
-        // rotated copy of the Cornell box baked 3% apart from the original that way).
+        // two voxels, where rounding puts a wall in one voxel layer or both, and a scaled or
+        // rotated copy of a scene bakes apart from the original (docs/decisions.md, "The
+        // scene's own frame").
         const int voxels = settings.resolution % 2 == 1 ? settings.resolution : std::max(settings.resolution - 1, 1);
         h = longest / voxels;
     }

@@ -1,38 +1,12 @@
 // Scene → VoxelScene: conservative, attribute-carrying voxelization (DESIGN.md "Grids").
 //
 // Takes the world-space triangles of a Scene and VoxelSettings; gives the sparse active
-// voxels with every channel except radiance and occlusion (the lighting stage writes those)
-// and emission only when the scene has emitters. What each channel holds:
-// - A voxel is active when a triangle overlaps its closed box by the separating axis test
-//   and leaves a piece of positive area inside (triangle_box.h: a voxel only touched along
-//   its boundary gets no piece and is not active; the active closed boxes still cover the
-//   whole surface, so nothing leaks between adjacent triangles).
-// - Per piece the visible area is the clipped area × the material's visibility: 1 for
-//   opaque, the fraction of texture samples at or above alphaCutoff for MASK, the mean
-//   alpha for BLEND, times (1 − transmission). Every channel is a mean over the pieces
-//   weighted by that visible area.
-// - albedo: base colour (factor × texture × COLOR_0) sampled on texelSamples² points per
-//   voxel face area (h²) spread over each piece by area (at least one per fan triangle of
-//   the piece), not at its vertices; emission likewise (emissionAt). The
-//   points are the centroids of a regular subdivision (exact for colours linear over the
-//   piece); texture detail finer than their spacing is point-sampled and can alias, as
-//   Texture has no mip levels to prefilter with. Materials without textures or varying
-//   COLOR_0 are not sampled at all: their colour is exact.
-// - normal: the mean geometric normal (winding), unit, or zero where the normals cancel.
-// - axisWeights: Σ area·max(±n_a, 0) per signed axis, in voxel-face units (area / h²).
-//   A doubleSided material is a surface on both sides, so its pieces add their area to
-//   both the +a and −a faces (area·|n_a| each); the normal channel keeps the geometric
-//   normal. A thin wall modelled as two single-sided faces gets both faces from geometry.
-// - opacity α = min(1, Σ visible area / h²): a flat surface crossing the voxel parallel to
-//   a face has α = 1; a surface that leaves part of the voxel's cross-section open less.
-// - solid = 1 when α ≥ 1; with fillInterior also every voxel whose centre lies inside a
-//   closed mesh (winding number of a ray along +z through the voxel column): interior
-//   voxels the surface does not reach become active with α = 1, the albedo of the mesh
-//   material's baseColorFactor, zero normal, zero axis weights and zero emission.
-//
-// Deterministic: triangles are processed in parallel (TBB) into (voxel, triangle)
-// fragments, sorted by (voxel, triangle) and reduced in that order in double precision,
-// so the output is the same bytes at any thread count.
+// voxels with every channel except radiance and occlusion (the lighting stage writes those),
+// each a mean over the triangle pieces inside a voxel weighted by their visible area; what
+// each channel holds is at voxelize(). Conservative, so nothing leaks between adjacent
+// triangles. Deterministic: triangles are processed in parallel (TBB) into (voxel, triangle)
+// fragments, sorted by (voxel, triangle) and reduced in that order in double precision, so
+// the output is the same bytes at any thread count.
 #pragma once
 
 #include "core/progress.h"
@@ -69,6 +43,33 @@ double voxelSizeFor(const Scene& scene, const VoxelSettings& settings);
 // given; anything that voxelizes a scene to pair it with another bake's grids must too.
 void anchorToVoxelGrid(Scene& scene, double voxelSize);
 
+// The voxels and their channels (emission only when the scene has emitters):
+// - A voxel is active when a triangle overlaps its closed box by the separating axis test
+//   and leaves a piece of positive area inside (triangle_box.h: a voxel only touched along
+//   its boundary gets no piece and is not active; the active closed boxes still cover the
+//   whole surface, so nothing leaks between adjacent triangles).
+// - Per piece the visible area is the clipped area × the material's visibility: 1 for
+//   opaque, the fraction of texture samples at or above alphaCutoff for MASK, the mean
+//   alpha for BLEND, times (1 − transmission). Every channel is a mean over the pieces
+//   weighted by that visible area.
+// - albedo: base colour (factor × texture × COLOR_0) sampled on texelSamples² points per
+//   voxel face area (h²) spread over each piece by area (at least one per fan triangle of
+//   the piece), not at its vertices; emission likewise (emissionAt). The
+//   points are the centroids of a regular subdivision (exact for colours linear over the
+//   piece); texture detail finer than their spacing is point-sampled and can alias, as
+//   Texture has no mip levels to prefilter with. Materials without textures or varying
+//   COLOR_0 are not sampled at all: their colour is exact.
+// - normal: the mean geometric normal (winding), unit, or zero where the normals cancel.
+// - axisWeights: Σ area·max(±n_a, 0) per signed axis, in voxel-face units (area / h²).
+//   A doubleSided material is a surface on both sides, so its pieces add their area to
+//   both the +a and −a faces (area·|n_a| each); the normal channel keeps the geometric
+//   normal. A thin wall modelled as two single-sided faces gets both faces from geometry.
+// - opacity α = min(1, Σ visible area / h²): a flat surface crossing the voxel parallel to
+//   a face has α = 1; a surface that leaves part of the voxel's cross-section open less.
+// - solid = 1 when α ≥ 1; with fillInterior also every voxel whose centre lies inside a
+//   closed mesh (winding number of a ray along +z through the voxel column): interior
+//   voxels the surface does not reach become active with α = 1, the albedo of the mesh
+//   material's baseColorFactor, zero normal, zero axis weights and zero emission.
 // `progress`, when given, is advanced by one per triangle (construct it with
 // scene.triangleCount()).
 VoxelScene voxelize(const Scene& scene, const VoxelSettings& settings, Progress* progress = nullptr,

@@ -3,7 +3,7 @@
 #include "bake/bake.h"
 #include "bake/bake_job.h"
 #include "bake/job_file.h"
-#include "bake/settings_table.h"
+#include "core/settings_table.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/rng.h"
@@ -81,22 +81,16 @@ Scene twoRooms(float wallThickness) {
 
 }  // namespace
 
-// Issue 5's bounds against the Cycles references (4096 spp, 64 bounces) of both Blender
-// Cornell boxes at the default settings: lightmap total (covered texels) and camera image
-// (the emitter, reference > 5, excluded) within 10% relative RMSE, the indirect part alone
-// (Cycles' total − direct: its converged path-traced indirect) within 20%; since the bright
-// patches (bake/bright_patches.h) within 6%, 7% and 12.5%. Measured at the defaults (quad /
-// point, 63 voxels): lightmap 4.95% / 5.82%, image 5.69% / 6.55%, indirect 10.4% / 11.9%; at
-// 127 voxels, the default before the voxel size was chosen per scene: 4.74% / 5.56%, 5.39% /
-// 5.90%, 9.9% / 11.3% (without the patches 5.31% / 8.18%, 6.45% / 9.43%, 11.2% / 16.8%).
+// Against the Cycles references (4096 spp, 64 bounces) of both Blender Cornell boxes at the
+// default settings: lightmap total (covered texels), the indirect part alone (Cycles' total −
+// direct: its converged path-traced indirect) and the camera image (the emitter, reference
+// > 5, excluded), as relative RMSE. Earlier bounds and measurements: docs/accuracy.md.
 TEST_CASE("The default bake of the Cycles Cornell boxes matches Cycles' lightmaps and renders", "[bake]") {
     VL_SKIP_WITHOUT_SHARED();
     const std::string dir = sharedDir() + "/reference/";
     // Issue 13's bounds: lightmap total, indirect and camera image relative RMSE. Measured
-    // (2026-11-27, 63 voxels from the free paths, gather level 2, gathering by rays): quad
-    // 2.70% / 5.20% / 4.40% (direct 1.88%), point 2.69% / 5.35% / 3.97% (direct 1.09%); at 111
-    // voxels and gather level 3, the default before: 2.48% / 4.70% / 4.13%, 2.53% / 5.03% /
-    // 3.68%.
+    // (63 voxels from the free paths, gather level 2, gathering by rays): quad 2.70% / 5.20% /
+    // 4.40% (direct 1.88%), point 2.69% / 5.35% / 3.97% (direct 1.09%).
     struct Bounds {
         const char* name;
         double total, indirect, image;
@@ -185,10 +179,10 @@ TEST_CASE("Receivers that gather their own cones read every mip level when the b
     settings.voxel.voxelSize = 1.0 / 32.0;
     settings.lightmap.atlasPerMesh = true;
     settings.lightmap.width = settings.lightmap.height = 16;
-    settings.gatherVisibility = GatherVisibility::Rays;
+    settings.gather.visibility = GatherVisibility::Rays;
     Diagnostics diagnostics(false, false);
     const BakeResult gathered = bake(scene, settings, diagnostics);
-    settings.gatherLevel = -1;
+    settings.gather.gatherLevel = -1;
     const BakeResult own = bake(scene, settings, diagnostics);
     CHECK(gathered.mips.levelCount() == 1);
     CHECK(own.mips.levelCount() > 3);
@@ -228,9 +222,9 @@ BakeResult bakeTwoRooms(double voxelSize, int resolution, int lightmapSize) {
 
 TEST_CASE("Light does not leak between the sealed bright rooms of scenes/two_rooms.gltf", "[bake]") {
     // Issue 13's measure at walls 0.5, 1 and 2 voxels thick: room B's mean lightmap value over
-    // room A's (face means over the six faces each), held to the issue's 0.3%. Measured
-    // (2026-11-24): 0.04%, 0%, 0% gathering by rays (bake/ray_gather.h); by cones 0.10%, 0.18%,
-    // 0.41%, the light entering through the coarse mip samples at the cones' far ends.
+    // room A's (face means over the six faces each), held to the issue's 0.3%. Measured:
+    // 0.04%, 0%, 0% gathering by rays (gather/ray_gather.h); by cones 0.10%, 0.18%, 0.41%, the
+    // light entering through the coarse mip samples at the cones' far ends.
     for (const double voxelSize : {0.2, 0.1, 0.05}) {
         constexpr double bound = 0.003;
         const BakeResult result = bakeTwoRooms(voxelSize, 0, 32);
@@ -288,8 +282,8 @@ double whiteBoxIndirectPowerRatio(const Scene& scene, int resolution, int lightm
     settings.voxel.ownFrame = ownFrame;
     settings.lightmap.atlasPerMesh = true;
     settings.lightmap.width = settings.lightmap.height = lightmapSize;
-    settings.bounces = bounces;
-    settings.bounceTail = bounces > 1;
+    settings.gather.bounces = bounces;
+    settings.gather.bounceTail = bounces > 1;
     Diagnostics diagnostics(false, false);
     const BakeResult result = bake(scene, settings, diagnostics);
     double indirectPower = 0.0;  // Σ_faces mean(E/π)·π·area, every face 1 m²
@@ -306,14 +300,11 @@ TEST_CASE("A closed white box's indirect power stays near energy conservation at
     // back takes a little: the exact value lies just under). E/π per texel, area-weighted.
     // The box is centred on a voxel corner, so with N = 41, 43, … 55 voxels across it its walls
     // fall in each of the 4 voxels of their level-2 gather cells twice over, and each surface
-    // ends inside a cell in a strip 1 to 4 voxels wide. Measured (2026-11-27, level 2): the
-    // series 0.971–1.004 of the exact value, the first gather alone 0.997–1.005 of Φρ; at level
-    // 3, whose cells the eight counts cross once, 0.961–1.012 and 0.997–1.016. Before the points weighed by
-    // the surface they stand for (irradiance_cache.h, the points' mass) the series was 0.917
-    // (strip 1 voxel wide, N = 49) to 1.022 (8 wide, N = 47), and with 32² texels a face over
-    // all eight 0.916–1.023, the first gather 0.987–1.026: the bounces created or lost energy
-    // by where the walls sat. The bounds are the measurements with a point or two to spare;
-    // they are not a derived limit.
+    // ends inside a cell in a strip 1 to 4 voxels wide. Measured (level 2): the series
+    // 0.971–1.004 of the exact value, the first gather alone 0.997–1.005 of Φρ. The gather
+    // points weigh by the surface they stand for (irradiance_cache.h, the points' mass), so
+    // the bounces neither create nor lose energy by where the walls sit. The bounds are the
+    // measurements with a point or two to spare; they are not a derived limit.
     const Scene scene = whiteBox();
     double lowest[2] = {1e9, 1e9}, highest[2] = {0.0, 0.0}, sum[2] = {0.0, 0.0};
     for (int resolution = 41; resolution <= 55; resolution += 2)
@@ -328,8 +319,8 @@ TEST_CASE("A closed white box's indirect power stays near energy conservation at
     INFO("first gather " << lowest[0] << " … " << highest[0] << " (mean " << sum[0] << "), series " << lowest[1]
                          << " … " << highest[1] << " (mean " << sum[1] << ")");
     // Over the eight alignments the errors must not all lean one way (measured means 1.003 and
-    // 0.992 at level 2, 1.007 and 0.997 at level 3): the emitter's black back takes a little,
-    // so the exact value lies just under 1.
+    // 0.992 at level 2): the emitter's black back takes a little, so the exact value lies just
+    // under 1.
     CHECK(sum[0] < 1.015);
     CHECK(sum[1] < 1.01);
     CHECK(sum[1] > 0.98);
@@ -344,20 +335,12 @@ TEST_CASE("A closed white box turned to any orientation keeps its indirect power
     // The same room as above, turned as a whole. Light does not care how a room is turned, so
     // the first gather must still hold Φρ (all light reflected once lands on some wall) and the
     // whole series Φρ/(1−ρ). By default the bake turns the grid with the room (scene/own_frame.h)
-    // and the room bakes as it does unturned: measured (2026-11-27) 0.997–1.006, held to
-    // 0.98–1.02. On the world's axes (grid-frame=world) every surface crosses the voxel axes
-    // at a slant; the bounds there, 0.85–1.08, are the ones the axis-aligned room was held to
-    // at two of its grid alignments before the gather points weighed by the surface they stand
-    // for; measured since (2026-11-27) 97.6–101.0% single-sided and 94.9–99.7% double-sided.
-    // Before the mips closed slanted walls (radiance_mips.cpp makeParent) and the voxels
-    // were lit by Lambert's cosine on their side's normal, the 30° turn about Y kept 72 % of
-    // the first gather and 55 % of the series, and four random turns of the same room 59–76 %
-    // and 42–60 % (measured on that code; the other three turns here were not run on it).
-    // Gathering by rays (2026-11-24), the series keeps 98–101 % over the four turns here; a
-    // ray that found no surface in the voxels it hit along one axis counted as black, and the
-    // same turns kept 61–77 %. Double-sided walls, whose voxels hold both sides: 95–98 % at
-    // 30–60° turns; when a ray read each axis's face by its own travel, it read a tilted
-    // wall's unlit side along the axes it glanced over, and kept 59–77 %.
+    // and the room bakes as it does unturned: measured 0.997–1.006, held to 0.98–1.02. On the
+    // world's axes (grid-frame=world) every surface crosses the voxel axes at a slant; the
+    // bounds there, 0.85–1.08, are the ones the axis-aligned room was held to at two of its grid
+    // alignments before the gather points weighed by the surface they stand for; measured
+    // 97.6–101.0% single-sided and 94.9–99.7% double-sided. How earlier gathers fared on
+    // these turns: docs/accuracy.md.
     const glm::quat turns[] = {
         glm::angleAxis(glm::radians(30.0f), vec3(0.0f, 1.0f, 0.0f)),
         glm::angleAxis(glm::radians(45.0f), glm::normalize(vec3(1.0f, 1.0f, 0.0f))),
@@ -407,8 +390,8 @@ TEST_CASE("The bounce tail follows each room's own decay", "[bake]") {
         settings.voxel.resolution = 64;
         settings.lightmap.atlasPerMesh = true;
         settings.lightmap.width = settings.lightmap.height = 16;
-        settings.bounces = bounces;
-        settings.bounceTail = tail;
+        settings.gather.bounces = bounces;
+        settings.gather.bounceTail = tail;
         Diagnostics diagnostics(false, false);
         const BakeResult result = bake(scene, settings, diagnostics);
         std::array<double, 2> mean{0.0, 0.0};
@@ -624,9 +607,9 @@ TEST_CASE("Job files set settings globally and per scene, under the command line
     CHECK(jobs[0].scenePath == (dir / "a.gltf").string());
     CHECK(jobs[0].outputDir == (dir / "out" / "a").string());
     CHECK(jobs[0].settings.voxel.resolution == 64);
-    CHECK(jobs[0].settings.cone.coneCount == 6);
+    CHECK(jobs[0].settings.gather.cone.coneCount == 6);
     CHECK(jobs[1].outputDir == (dir / "out" / "bee").string());
-    CHECK(jobs[1].settings.cone.coneCount == 32);
+    CHECK(jobs[1].settings.gather.cone.coneCount == 32);
     CHECK(jobs[1].settings.voxel.resolution == 64);
     CHECK_FALSE(jobs[1].settings.outputs.images);
     REQUIRE(jobs[1].addedLights.size() == 1);
@@ -636,8 +619,8 @@ TEST_CASE("Job files set settings globally and per scene, under the command line
     // The command line's settings apply over the file's, global and per scene; the rest stay the file's.
     const std::vector<BakeJob> overridden = readJobFile(path.string(), BakeSettings{}, "output", {{"cones", "12"}});
     REQUIRE(overridden.size() == 2);
-    CHECK(overridden[0].settings.cone.coneCount == 12);
-    CHECK(overridden[1].settings.cone.coneCount == 12);
+    CHECK(overridden[0].settings.gather.cone.coneCount == 12);
+    CHECK(overridden[1].settings.gather.cone.coneCount == 12);
     CHECK(overridden[1].settings.voxel.resolution == 64);
     CHECK_FALSE(overridden[1].settings.outputs.images);
     CHECK_THROWS_WITH(readJobFile(path.string(), BakeSettings{}, "output", {{"cones", "many"}}), Catch::Contains("cones"));

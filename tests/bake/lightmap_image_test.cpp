@@ -1,13 +1,13 @@
-// The lightmap-lit image (bake/lightmap_image.h): each pixel is albedo × the lightmap read
+// The lightmap-lit image (lightmap/lightmap_image.h): each pixel is albedo × the lightmap read
 // bilinearly at TEXCOORD_1 (v down the image, as the viewer reads it), plus emission; a
 // surface outside every lightmap shows albedo × the viewer's unlit level; n × n reads a pixel
 // give the lightmap's mean over the pixel; the bake writes it beside its own image, and it
 // agrees with that image where the lightmap resolves the light.
 #include "bake/bake_job.h"
 #include "bake/bake_settings.h"
-#include "bake/settings_table.h"
-#include "bake/lightmap_image.h"
-#include "bake/receivers.h"
+#include "core/settings_table.h"
+#include "lightmap/lightmap_image.h"
+#include "receivers/receivers.h"
 
 #include "core/image_io.h"
 #include "export/lightmap_encoding.h"

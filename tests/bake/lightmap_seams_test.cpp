@@ -1,10 +1,10 @@
-// Lightmap chart seams (bake/lightmap_seams.h): which edges are seams, the jump measured
+// Lightmap chart seams (lightmap/lightmap_seams.h): which edges are seams, the jump measured
 // across them against hand-computed values, stitching a step away, and a bake of a floor
 // split into two charts whose seam disappears when stitched.
 #include "bake/bake.h"
-#include "bake/dilate.h"
-#include "bake/lightmap_image.h"
-#include "bake/lightmap_seams.h"
+#include "lightmap/dilate.h"
+#include "lightmap/lightmap_image.h"
+#include "lightmap/lightmap_seams.h"
 #include "quad_scene.h"
 
 #include <catch2/catch.hpp>

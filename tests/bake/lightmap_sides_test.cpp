@@ -1,8 +1,8 @@
-// Which side of a double-sided surface a lightmap holds (bake/lightmap_sides.h): a lid closing a
+// Which side of a double-sided surface a lightmap holds (receivers/lightmap_sides.h): a lid closing a
 // black box, its front facing the sky. Under a uniform sky of radiance L its top receives π L
 // (texel L) and its underside nothing (the box is closed and black): the setting picks which.
 #include "bake/bake.h"
-#include "bake/receivers.h"
+#include "receivers/receivers.h"
 #include "core/error.h"
 #include "quad_scene.h"
 

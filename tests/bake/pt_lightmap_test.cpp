@@ -10,7 +10,7 @@
 //   spp Cycles would show 17.6% · √(16 / S); we allow the factor 1.5;
 // - relative RMSE, point light (no Cycles table): 1.5× the error our own sample variance
 //   predicts, the reference's noise estimated as ours at its 4096 spp.
-#include "bake/receivers.h"
+#include "receivers/receivers.h"
 
 #include "core/image_io.h"
 #include "metrics/metrics.h"

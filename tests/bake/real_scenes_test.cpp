@@ -1,5 +1,5 @@
 // An artist-made room against Cycles, through the lightmap as it ships: the view an engine
-// shows (bake/lightmap_image.h) against a Cycles render of the same camera
+// shows (lightmap/lightmap_image.h) against a Cycles render of the same camera
 // (tests/reference/grey-white-room, README there: 4 × 1024 spp, every material Lambert; and
 // tests/reference/classroom).
 #include "bake/bake.h"
@@ -48,7 +48,7 @@ ErrorMetrics lightmapLitAgainst(const std::string& job, const SettingAssignments
 TEST_CASE("The grey-white room's lightmap-lit view against Cycles: the transport alone, every material Lambert", "[bake]") {
     VL_SKIP_WITHOUT_SHARED();
     // Cycles' own noise at 4096 spp is 3.4% per pixel. The view averages 4 × 4 reads a pixel,
-    // as Cycles' 1-pixel box does (bake/lightmap_image.h). A lightmap whose every texel holds
+    // as Cycles' 1-pixel box does (lightmap/lightmap_image.h). A lightmap whose every texel holds
     // the path tracer's light is itself far from Cycles at this atlas (docs/accuracy.md, the
     // floor); the bound sits just above what docs/accuracy.md measures, so a regression
     // shows. The means are within 2% per channel.

@@ -7,7 +7,7 @@
 #include "bake/bake_job.h"
 #include "bake/bake_settings.h"
 #include "bake/job_file.h"
-#include "bake/receivers.h"
+#include "receivers/receivers.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "metrics/metrics.h"
@@ -305,8 +305,7 @@ AgainstCycles againstCycles(const CyclesSky& sky, bool withImage) {
 
 TEST_CASE("Image skies against Cycles: the open Cornell box, turned, and a room lit through its window", "[bake]") {
     // Cycles 4096 spp, tests/reference/sky (README there: how they were made); the room under
-    // a uniform world too. Measured (2026-11-27) with the default bake: see the README's "An
-    // image sky".
+    // a uniform world too. Measured with the default bake: docs/decisions.md, "An image sky".
     const CyclesSky skies[] = {
         {"cornell_sky_image", sharedDir() + "/reference/cornell_sky.gltf", 0.0f},
         {"cornell_sky_image_rot90", sharedDir() + "/reference/cornell_sky.gltf", 90.0f},
@@ -359,8 +358,8 @@ TEST_CASE("The classroom's lightmap against Cycles: its sky, sun and lamps throu
     // TEXCOORD_1), with the classroom job's sky and sun (README there). Compared where Cycles
     // wrote light: the 5,294 texels it leaves black are faces pressed against others (the
     // floor under feet, frame tops under desk tops); there the leg bottoms that look down
-    // through the one-sided floor see our sky's lower half and Cycles' nothing. Measured
-    // (2026-11-27): 13.1%, means +1.7…+2.0%; Cycles' own noise at 1024 spp about 3.9%.
+    // through the one-sided floor see our sky's lower half and Cycles' nothing. Measured:
+    // 13.1%, means +1.7…+2.0%; Cycles' own noise at 1024 spp about 3.9%.
     const std::string dir = sourceDir() + "/tests/reference/classroom/";
     const std::vector<BakeJob> jobs = readJobFile(dir + "classroom_baked.json", quietSettings(), tempDir("classroom-cycles"));
     REQUIRE(jobs.size() == 1);

@@ -6,7 +6,7 @@
 #include "bake/bake_settings.h"
 #include "lighting/direct_light.h"
 #include "bake/job_file.h"
-#include "bake/receivers.h"
+#include "receivers/receivers.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "metrics/metrics.h"
@@ -99,8 +99,8 @@ TEST_CASE("The open Cycles Cornell box under a uniform sky: the bake and the pat
     MetricOptions options;
     options.mask = &mask;
 
-    // The default bake with the sky. Measured (2026-11-27): lightmap 4.2%, indirect 6.0%,
-    // image 3.2%, every mean within 0.1%.
+    // The default bake with the sky. Measured: lightmap 4.2%, indirect 6.0%, image 3.2%, every
+    // mean within 0.1%.
     BakeSettings settings = quietSettings();
     settings.outputs.images = true;
     applySetting(bakeSettingsTable(), settings, "sky", "0.6,0.75,1.0");

@@ -1,9 +1,9 @@
-// The final gather in a lightmap's texel space (bake/texel_gather.h) against what a step in a
+// The final gather in a lightmap's texel space (gather/texel_gather.h) against what a step in a
 // floor must show under a uniform sky: its top, open to the whole sky, holds L at every texel up
 // to its edge; the floor at its foot loses the sky the step's face hides, by quadrature; and the
 // records' filter neither lifts the shaded foot onto the top nor darkens the top from it.
 #include "bake/bake.h"
-#include "bake/receivers.h"
+#include "receivers/receivers.h"
 #include "quad_scene.h"
 
 #include <catch2/catch.hpp>
@@ -54,7 +54,7 @@ TEST_CASE("A step under a uniform sky: its top holds L to its edge, its foot the
     settings.sky = vec3(1.0f);
     settings.lightmap.atlasPerMesh = true;
     settings.lightmap.width = settings.lightmap.height = 128;  // 1.2 × 1.6 cm texels on the floors
-    settings.gatherVisibility = GatherVisibility::Rays;         // the texel gather's precondition
+    settings.gather.visibility = GatherVisibility::Rays;         // the texel gather's precondition
     Diagnostics diagnostics(false, false);
     const BakeResult result = bake(scene, settings, diagnostics);
     REQUIRE(result.gatherVisibility.visibility == GatherVisibility::Rays);
@@ -178,8 +178,8 @@ TEST_CASE("A floor under a block: the texels under it hold their open neighbours
     settings.sky = vec3(1.0f);
     settings.lightmap.atlasPerMesh = true;
     settings.lightmap.width = settings.lightmap.height = 64;
-    settings.gatherVisibility = GatherVisibility::Rays;
-    settings.lightmapGather = gather;
+    settings.gather.visibility = GatherVisibility::Rays;
+    settings.gather.lightmapGather = gather;
     Diagnostics diagnostics(false, false);
     const BakeResult result = bake(scene, settings, diagnostics);
     Diagnostics quiet(false, false);

@@ -215,8 +215,8 @@ TEST_CASE("Voxels chosen around a light 5 mm under a ceiling keep the bounce lig
         BakeSettings settings = quietSettings();
         settings.voxel.resolution = resolution;
         settings.lighting.visibilityBy = visibility;
-        settings.bounces = 0;
-        settings.bounceTail = false;
+        settings.gather.bounces = 0;
+        settings.gather.bounceTail = false;
         settings.lightmap.atlasPerMesh = true;
         settings.lightmap.width = settings.lightmap.height = 16;
         Diagnostics diagnostics(false, false);

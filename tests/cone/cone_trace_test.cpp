@@ -1,5 +1,5 @@
 #include "cone/cone_trace.h"
-#include "cone_scenes.h"
+#include "support/cone_scenes.h"
 #include "core/rng.h"
 #include "core/sampling.h"
 

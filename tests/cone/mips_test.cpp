@@ -1,6 +1,6 @@
 #include "cone/cone_trace.h"
 #include "cone/radiance_mips.h"
-#include "cone_scenes.h"
+#include "support/cone_scenes.h"
 #include "core/error.h"
 #include "core/rng.h"
 

@@ -1,14 +1,14 @@
 // The CUDA backend (issue 7). On a machine without a GPU (CI): the device choice falls back
 // to the CPU and says why, --device cuda is a clear error, and the per-element functions the
-// GPU threads run (trace/path_elements.h, bake/shade_element.h, shared with the CPU stages)
+// GPU threads run (trace/path_elements.h, gather/shade_element.h, shared with the CPU stages)
 // are run element by element on the host and checked bit for bit against the stages' images,
 // together with the array lengths the launchers copy. On a GPU machine: CPU and GPU agree on the Cornell box
 // within the tolerances written in cuda/launchers.h (these tests skip with a message
 // elsewhere).
 #include "bake/bake.h"
-#include "bake/receivers.h"
-#include "bake/shade_element.h"
-#include "bake/shade_receivers.h"
+#include "receivers/receivers.h"
+#include "gather/shade_element.h"
+#include "gather/shade_receivers.h"
 #include "cone/radiance_mips.h"
 #include "core/error.h"
 #include "cuda/device.h"

@@ -329,10 +329,10 @@ TEST_CASE("Reading bad .vdb input names the file and the grid", "[voxel]") {
 
     // tools/fuzz/fuzz_vdb's findings. Lengths that OpenVDB allocates (and, for a metadata
     // string, fills) before reading them are refused before they are allocated, naming the size
-    // claimed (the 2.5 GB metadata name took 12.6 GB and 67 s before); a root node claiming 2^32
-    // tiles stops at the file's end (OpenVDB read past it for 13 s, then failed on a block); a
-    // raw block longer than its leaf is refused (OpenVDB 10.0 wrote it past the leaf's buffer:
-    // voxel/vdb_blocks.cpp; this test runs under ASan in CI).
+    // claimed (a 10 kB file's 2.5 GB metadata name); a root node claiming 2^32 tiles stops at
+    // the file's end (OpenVDB read past it, then failed on a block); a raw block longer than
+    // its leaf is refused (OpenVDB 10.0 wrote it past the leaf's buffer: voxel/vdb_blocks.cpp;
+    // this test runs under ASan in CI).
     const std::string data = test::sourceDir() + "/tests/voxel/data/";
     for (const auto& [file, says] : {std::pair<std::string, std::string>{"blosc_claims_2e48.vdb",
                                                                          "claims a block of 281474976710656 bytes"},

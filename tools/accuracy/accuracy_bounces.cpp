@@ -81,8 +81,8 @@ int main(int argc, char** argv) {
             path.quiet = true;
             const double pathMean = meanOf(renderCamera(traced.trace, traced.bvh, *traced.camera, path).indirect, region);
             BakeSettings settings = job.settings;
-            settings.bounces = count - 1;
-            settings.bounceTail = false;
+            settings.gather.bounces = count - 1;
+            settings.gather.bounceTail = false;
             Diagnostics diagnostics(false, false);
             const double bakeMean = meanOf(bake(scene, settings, diagnostics).images.at(0).indirect, region);
             std::printf("%2d bounce%s: path tracer %.4f, bake %.4f (%+.1f%%)\n", count, count == 1 ? " " : "s", pathMean,

@@ -10,7 +10,7 @@
 #include "accuracy_job.h"
 #include "bake/bake.h"
 #include "bake/bake_settings.h"
-#include "bake/fan_rays.h"
+#include "gather/fan_rays.h"
 #include "bake/job_file.h"
 #include "core/error.h"
 #include "core/sampling.h"
@@ -60,9 +60,9 @@ int main(int argc, char** argv) {
         BakeJob job = accuracyJob(argv[1], assignments);
         job.settings.quiet = true;
         job.settings.outputs.lightmaps = job.settings.outputs.grids = false;
-        job.settings.bounces = 0;
-        job.settings.bounceTail = false;
-        job.settings.brightPatches.factor = 0.0f;
+        job.settings.gather.bounces = 0;
+        job.settings.gather.bounceTail = false;
+        job.settings.gather.brightPatches.factor = 0.0f;
 
         Scene scene = loadJobScene(job);
         Diagnostics diagnostics(false, false);
@@ -73,9 +73,9 @@ int main(int argc, char** argv) {
         if (view.emitterCount > 0 || view.sky.present())
             throw InputError(job.scenePath + ": it has a sky or emissive surfaces, whose light the exact side does not "
                                              "compute: give its lights alone (a job without \"sky\", emission off)");
-        const MipView mips = stages.result.mips.view();
+        const MipView mips = stages.indirect.mips.view();
         const Level0Texels level0(mips.levels[0]);
-        const std::vector<FaceRadiance>& faces = stages.bright.restFaces;
+        const std::vector<FaceRadiance>& faces = stages.indirect.bright.restFaces;
         const CameraModel camera =
             makeCameraModel(bakeCameras(scene, job.settings).front(), job.settings.imageWidth, job.settings.imageHeight);
 

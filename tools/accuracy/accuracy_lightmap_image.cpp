@@ -1,4 +1,4 @@
-// How far the lightmap-lit image (bake/lightmap_image.h) is from the bake's own camera image,
+// How far the lightmap-lit image (lightmap/lightmap_image.h) is from the bake's own camera image,
 // and what of it the lightmap's 8-bit RGBM accounts for. Bakes the scene (or a job file's
 // first scene) in memory as `voxlight bake` does, then lights the first camera by its
 // lightmaps twice: as scene.glb carries them (RGBM, what the bake writes) and as the float
@@ -15,7 +15,7 @@
 #include "bake/bake.h"
 #include "bake/bake_job.h"
 #include "bake/job_file.h"
-#include "bake/lightmap_image.h"
+#include "lightmap/lightmap_image.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "metrics/metrics.h"
@@ -86,10 +86,10 @@ int main(int argc, char** argv) {
         Diagnostics diagnostics(false, false);
         Scene scene = loadJobScene(job);
         VoxelStages stages = bakeVoxelStages(scene, job.settings, diagnostics);
-        const ReceiverShading shading(*stages.tracing, stages.result.mips, stages.cache, stages.bright, job.settings, stages.onGpu);
+        const ReceiverGather gather = bakeReceiverGather(*stages.tracing, stages.indirect, job.settings, stages.onGpu);
         std::vector<ShippedLightmap> shipped, floats;
         for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics)) {
-            const ReceiverLighting lit = shading.shadeAtlasRows(atlas, 0, atlas.receivers.height);
+            const ReceiverLighting lit = gather.atlasRows(atlas, 0, atlas.receivers.height);
             const BakedLightmap lightmap = finishLightmap(atlas, lit.direct, lit.indirect, lit.open, scene, job.settings);
             shipped.push_back({lightmap.meshes, shippedLightmapTexels(lightmap.total)});
             floats.push_back({lightmap.meshes, lightmap.total});
@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
                         lightmap.total.width, lightmap.total.height, lightmap.coveredTexels, lightmap.meshes.size());
         }
         const Camera camera = bakeCameras(scene, job.settings).front();
-        const BakedImage image = shading.shadeCamera(camera);
+        const BakedImage image = bakeCameraImage(gather, *stages.tracing, camera, job.settings);
         const CameraModel model = makeCameraModel(camera, job.settings.imageWidth, job.settings.imageHeight);
         const ReceiverScene& tracing = *stages.tracing;
         const Image rgbm =

@@ -28,9 +28,9 @@
 #include "bake/bake.h"
 #include "bake/bake_job.h"
 #include "bake/job_file.h"
-#include "bake/lightmap_image.h"
-#include "bake/shade_element.h"
-#include "bake/lightmap_sides.h"
+#include "lightmap/lightmap_image.h"
+#include "gather/shade_element.h"
+#include "receivers/lightmap_sides.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "trace/path_tracer.h"
@@ -121,7 +121,7 @@ int main(int argc, char** argv) {
         Scene scene = loadJobScene(job);
         VoxelStages stages = bakeVoxelStages(scene, job.settings, diagnostics);
         const ReceiverScene& tracing = *stages.tracing;
-        const ReceiverShading shading(tracing, stages.result.mips, stages.cache, stages.bright, job.settings, stages.onGpu);
+        const ReceiverGather gather = bakeReceiverGather(tracing, stages.indirect, job.settings, stages.onGpu);
         struct Baked {
             LightmapAtlas atlas;  // its samples on the sides the lightmap holds
             Image shipped;
@@ -132,7 +132,7 @@ int main(int argc, char** argv) {
         std::vector<Baked> baked;
         std::vector<int> atlasOf(scene.meshes.size(), -1);
         for (LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics)) {
-            const ReceiverLighting lit = shading.shadeAtlasRows(atlas, 0, atlas.receivers.height);
+            const ReceiverLighting lit = gather.atlasRows(atlas, 0, atlas.receivers.height);
             const BakedLightmap lightmap = finishLightmap(atlas, lit.direct, lit.indirect, lit.open, scene, job.settings);
             if (job.settings.lightmapSide == LightmapSide::Inside)
                 orientLightmapSamples(atlas.receivers, tracing.bvh.view(), tracing.traceScene.view(), tracing.viewpoints);

@@ -1,4 +1,4 @@
-// Where a lightmap's chart seams jump, and what stitching leaves (bake/lightmap_seams.h).
+// Where a lightmap's chart seams jump, and what stitching leaves (lightmap/lightmap_seams.h).
 // Bakes the scene (or a job file's first scene) in memory as `voxlight bake` does, finishes
 // each atlas twice, unstitched and stitched, and reports the seams' mean relative jump (what
 // bake.json's "lightmap_seams" reports) over all seams and by class: the fold between the two
@@ -16,8 +16,8 @@
 #include "bake/bake.h"
 #include "bake/bake_job.h"
 #include "bake/job_file.h"
-#include "bake/lightmap_image.h"
-#include "bake/lightmap_seams.h"
+#include "lightmap/lightmap_image.h"
+#include "lightmap/lightmap_seams.h"
 #include "core/error.h"
 #include "trace/path_tracer.h"
 
@@ -111,8 +111,7 @@ int main(int argc, char** argv) {
         Diagnostics diagnostics(false, false);
         Scene scene = loadJobScene(job);
         VoxelStages stages = bakeVoxelStages(scene, job.settings, diagnostics);
-        const ReceiverShading shading(*stages.tracing, stages.result.mips, stages.cache, stages.bright, job.settings,
-                                      stages.onGpu);
+        const ReceiverGather gather = bakeReceiverGather(*stages.tracing, stages.indirect, job.settings, stages.onGpu);
         // Folds: < 1°, 1-15°, 15-45°, ≥ 45°; lengths: the longer side < 2, 2-16, ≥ 16 texels;
         // levels: the mean of the two sides unstitched, per channel, < 0.01, 0.01-0.1, ≥ 0.1.
         // Texels: whether the two sides' on-edge reads touch a texel in common (a covered texel
@@ -135,7 +134,7 @@ int main(int argc, char** argv) {
         std::vector<vec2> bakeReads;
         size_t pairIndex = 0;
         for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics)) {
-            const ReceiverLighting lit = shading.shadeAtlasRows(atlas, 0, atlas.receivers.height);
+            const ReceiverLighting lit = gather.atlasRows(atlas, 0, atlas.receivers.height);
             BakeSettings plain = job.settings, stitched = job.settings;
             plain.lightmapStitch = false;
             stitched.lightmapStitch = true;

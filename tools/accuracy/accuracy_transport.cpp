@@ -15,10 +15,10 @@
 //   (default scene: the Cycles Cornell box with the quad light, ../shared/reference/)
 #include "bake/bake.h"
 #include "bake/bake_settings.h"
-#include "bake/bright_patches.h"
+#include "gather/bright_patches.h"
 #include "lighting/surface_points.h"
 #include "cone/cone_trace.h"
-#include "cone/irradiance_cache.h"
+#include "gather/irradiance_cache.h"
 #include "core/error.h"
 #include "core/sampling.h"
 #include "scene/gltf_loader.h"
@@ -97,8 +97,8 @@ int main(int argc, char** argv) {
             else if (a.find('=') != std::string::npos) applySetting(bakeSettingsTable(), settings, a);
             else path = a;
         }
-        settings.bounces = 0;
-        settings.bounceTail = false;
+        settings.gather.bounces = 0;
+        settings.gather.bounceTail = false;
         const Scene scene = loadGltf(path);
         Diagnostics diagnostics;
         const BakeResult baked = bake(scene, settings, diagnostics);
@@ -110,7 +110,7 @@ int main(int argc, char** argv) {
         const SceneTriangles triangles = gatherTriangles(anchored);
         const Bvh bvh = Bvh::build(triangles);
         const TraceScene traced = TraceScene::build(anchored, triangles);
-        // --hot: the bake's own split (bake/bright_patches.h) with every bright face a patch of
+        // --hot: the bake's own split (gather/bright_patches.h) with every bright face a patch of
         // its own and none left in the mips; the rays read the bright faces, the cones the rest.
         VoxelScene rest = baked.voxels, hot = baked.voxels;
         size_t hotFaces = 0;
@@ -130,11 +130,11 @@ int main(int argc, char** argv) {
         const RadianceMips restMips = hotFactor > 0.0f ? buildRadianceMips(rest) : RadianceMips();
         const VoxelRadianceLookup lookup(baked.voxels, traced);
         const VoxelRadianceLookup hotLookup(hot, traced);
-        const IrradianceCache cache(baked.voxels, settings.gatherLevel);
+        const IrradianceCache cache(baked.voxels, settings.gather.gatherLevel);
         const MipView mips = hotFactor > 0.0f ? restMips.view() : baked.mips.view();
-        const ConeSet& set = coneSet(settings.cone.coneCount);
+        const ConeSet& set = coneSet(settings.gather.cone.coneCount);
         const float h = float(baked.voxels.voxelSize);
-        const float halfAngle = coneHalfAngle(set, settings.cone);
+        const float halfAngle = coneHalfAngle(set, settings.gather.cone);
         const float cosCap = std::cos(halfAngle);
 
         struct Sums {
@@ -145,7 +145,7 @@ int main(int argc, char** argv) {
         Sums byRing[4];
         std::vector<std::pair<vec3, std::array<double, 2>>> mapped;
         for (const GatherPoint& point : cache.points()) {
-            const vec3 apex = coneApex(point.position, point.normal, settings.cone, h);
+            const vec3 apex = coneApex(point.position, point.normal, settings.gather.cone, h);
             // The mesh under the point: the first surface straight back from the apex.
             Ray down;
             down.origin = apex;
@@ -155,18 +155,18 @@ int main(int argc, char** argv) {
             Sums& mesh = byMesh[scene.meshes[triangles.meshIndex[under.triangle]].node];
             ++mesh.points;
             const double before[2] = {mesh.cone, mesh.rays};
-            for (int turn = 0; turn < settings.gatherTurns; ++turn) {
-                const float angle = 2.0f * kPi * (point.turn + float(turn) / float(settings.gatherTurns));
+            for (int turn = 0; turn < settings.gather.gatherTurns; ++turn) {
+                const float angle = 2.0f * kPi * (point.turn + float(turn) / float(settings.gather.gatherTurns));
                 const vec3 tangent = std::cos(angle) * point.tangent + std::sin(angle) * glm::cross(point.normal, point.tangent);
                 const vec3 bitangent = glm::cross(point.normal, tangent);
                 for (int k = 0; k < set.count; ++k) {
                     const vec3& d = set.directions[k];
                     const vec3 dir = glm::normalize(d.x * tangent + d.y * bitangent + d.z * point.normal);
                     ConeOrigin origin;
-                    origin.apexHeight = settings.cone.startOffset * h;
+                    origin.apexHeight = settings.gather.cone.startOffset * h;
                     origin.cosToNormal = d.z;
-                    const ConeResult cone = traceCone(mips, apex, dir, std::tan(halfAngle), settings.cone.stepFactor,
-                                                      settings.cone.maxDistance, origin);
+                    const ConeResult cone = traceCone(mips, apex, dir, std::tan(halfAngle), settings.gather.cone.stepFactor,
+                                                      settings.gather.cone.maxDistance, origin);
                     // Rays spread uniformly over the cone's cap (below the receiver's plane: none).
                     vec3 u, v;
                     orthonormalBasis(dir, u, v);
@@ -187,7 +187,7 @@ int main(int argc, char** argv) {
                             }
                         }
                     radiance /= double(n * n);
-                    const double w = set.weights[k] / settings.gatherTurns;
+                    const double w = set.weights[k] / settings.gather.gatherTurns;
                     const double coneRadiance =
                         (cone.radiance.x + cone.radiance.y + cone.radiance.z) / 3.0 + hotRadiance / double(n * n);
                     mesh.cone += w * coneRadiance;
@@ -221,7 +221,7 @@ int main(int argc, char** argv) {
             }
         }
         printf("%s: %d cones (%d turns), first bounce gathered by cones / by rays over each cone's cap (%d rays)\n",
-               path.c_str(), set.count, settings.gatherTurns, raysPerAxis * raysPerAxis);
+               path.c_str(), set.count, settings.gather.gatherTurns, raysPerAxis * raysPerAxis);
         if (hotFactor > 0.0f)
             printf("  the %zu voxel faces brighter than %g times the mean face gathered by the rays in both\n", hotFaces,
                    double(hotFactor));

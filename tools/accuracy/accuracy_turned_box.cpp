@@ -15,8 +15,8 @@
 //   build/accuracy/accuracy_turned_box [--lit] [--scene FILE [--drop TEXT …]] [RESOLUTION …]
 #include "bake/bake.h"
 #include "bake/bake_settings.h"
-#include "bake/ray_gather.h"
-#include "cone/bounces.h"
+#include "gather/ray_gather.h"
+#include "gather/bounces.h"
 #include "lighting/lighting.h"
 #include "scene/gltf_loader.h"
 #include "scene/scene.h"
@@ -144,15 +144,14 @@ int main(int argc, char** argv) {
             const ReceiverScene tracing(scene);
             const BvhView bvh = tracing.bvh.view();
             const TraceSceneView view = tracing.traceScene.view();
-            FaceTransport transport;
-            const TransportBuilder rays = [&](const std::vector<GatherPoint>& points, const MipView& mips) -> const FaceTransport& {
-                transport = rayTransport(points, mips, n, bvh, view, settings.bounceRays);
-                return transport;
-            };
-            IrradianceCache points(voxels, settings.bounceGatherLevel);
-            RadianceMips mips;
-            propagateBounces(voxels, bounceConeSettings(settings), 1, settings.bounceGatherLevel, BounceTail::None,
-                             nullptr, &mips, &points, &rays, nullptr);
+            BounceSettings bounce{1, settings.gather.bounceGatherLevel, BounceTail::None,
+                                  bounceConeSettings(settings.gather)};
+            bounce.byRays = true;
+            bounce.raysPerAxis = settings.gather.bounceRays;
+            const GatherScene rays{bvh, view};
+            const Bounced bounced =
+                propagateBounces(voxels, bounce, &rays, IrradianceCache(voxels, settings.gather.bounceGatherLevel));
+            const IrradianceCache& points = bounced.points;
             // The added light per face, weighted by its share of its voxel's surface area;
             // lit: the added light over the direct light, both so weighted.
             double sum = 0.0, squares = 0.0, weight = 0.0, lowest = 1e9, directSum = 0.0;

@@ -10,11 +10,11 @@
 #include "bake/bake.h"
 #include "bake/bake_job.h"
 #include "bake/bake_settings.h"
-#include "bake/bright_patches.h"
+#include "gather/bright_patches.h"
 #include "lighting/direct_light.h"
 #include "bake/job_file.h"
-#include "bake/ray_gather.h"
-#include "cone/irradiance_cache.h"
+#include "gather/ray_gather.h"
+#include "gather/irradiance_cache.h"
 #include "cone/radiance_mips.h"
 #include "bake/voxel_size.h"
 #include "core/error.h"
@@ -154,7 +154,7 @@ int main(int argc, char** argv) {
                         mean3(t.exact) > 0.0 ? mean3(t.voxel) / mean3(t.exact) : 0.0);
         }
         // The bright patches a final gather of this direct light would split off.
-        const BrightPatchSplit split = splitBrightPatches(voxels, surfacePoints, settings.brightPatches);
+        const BrightPatchSplit split = splitBrightPatches(voxels, surfacePoints, settings.gather.brightPatches);
         double patchPower = 0.0;
         for (const BrightPatch& p : split.patches) patchPower += kPi * double(p.area) * mean3(glm::dvec3(p.radiance));
         std::printf("bright patches: %zu from %zu faces, power %.4f W (of %.4f W the voxels reflect)\n",
@@ -176,13 +176,13 @@ int main(int argc, char** argv) {
             std::vector<FaceRadiance> bright(voxels.size());
             for (size_t v = 0; v < voxels.size(); ++v)
                 for (int f = 0; f < 6; ++f) bright[v][size_t(f)] = voxels.faceRadiance[v][size_t(f)] - split.restFaces[v][size_t(f)];
-            const EnclosedProbe enclosed = enclosedSurfaceProbe(bvh, view);
-            IrradianceCache cache(voxels, settings.gatherLevel, &enclosed);
+            const GatherScene enclosed{bvh, view};
+            IrradianceCache cache(voxels, settings.gather.gatherLevel, &enclosed);
             const RadianceMips mips = buildRadianceMipsFor(voxels, MipReaders::RaysOnly);
             const std::vector<vec3> byRays = gatherByRays(cache.points(), mips.view(), bright, bvh, view, 64);
             std::vector<vec3> byPatches(cache.points().size(), vec3(0.0f));
             addBrightPatchIrradiance(cache.points(), fanOrigins(cache.points(), float(h), bvh, view), split, bvh,
-                                     settings.brightPatches.samples, byPatches);
+                                     settings.gather.brightPatches.samples, byPatches);
             double sumRays = 0.0, sumPatches = 0.0;
             for (size_t k = 0; k < byRays.size(); ++k) {
                 sumRays += mean3(glm::dvec3(byRays[k]));

@@ -1,5 +1,5 @@
 # Blender's Lightmap Pack on a glTF scene, the peer of voxlight's generated lightmap UVs
-# (README "Lightmap UVs for scenes that have none"). Run:
+# (docs/atlas.md, "Before this: Lightmap Pack and the charts by projection"). Run:
 #   blender -b --factory-startup --python tools/bench/blender_lightmap_pack.py -- SCENE.gltf|glb MARGIN_TEXELS RESOLUTION
 # Packs every mesh into one new UV layer together (Lightmap Pack's "pack in one"), with a
 # margin of MARGIN_TEXELS at RESOLUTION texels (PREF_MARGIN_DIV = margin / resolution), and

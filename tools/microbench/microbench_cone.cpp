@@ -1,7 +1,7 @@
 // Cone-tracing throughput: irradiance gathers per second for 6/16/32 cones, mip build and
 // one voxel bounce, on a closed box of radiating walls (the Cornell-box situation: every
 // cone ends on a wall). Run: build/microbench/microbench_cone
-#include "cone/bounces.h"
+#include "gather/bounces.h"
 #include "cone/cone_trace.h"
 
 #include <benchmark/benchmark.h>
@@ -61,7 +61,7 @@ void BM_Bounce(benchmark::State& state) {
     settings.coneCount = 6;
     for (auto _ : state) {
         VoxelScene copy = box;
-        propagateBounces(copy, settings, 1, 0, BounceTail::None);
+        propagateBounces(copy, BounceSettings{1, 0, BounceTail::None, settings});
         benchmark::DoNotOptimize(copy.radiance.data());
     }
     state.SetItemsProcessed(int64_t(state.iterations() * box.size()));

@@ -8,8 +8,8 @@
 // usable GPU it prints the CPU columns and says why.
 //
 // Run: build/microbench/microbench_cuda [scene.gltf] [--resolution N] [--lightmap-res N] [--size N] [--spp N]
-#include "bake/receivers.h"
-#include "bake/shade_receivers.h"
+#include "receivers/receivers.h"
+#include "gather/shade_receivers.h"
 #include "cone/radiance_mips.h"
 #include "core/error.h"
 #include "cuda/device.h"

@@ -24,7 +24,7 @@ const capturing = params.get('capture') === '';         // the canvas alone, pos
 const capturingPage = params.get('capture') === 'page';  // the whole page: /ready once drawn
 const MODES = { lit: 0, lightmap: 1, albedo: 2 };
 const UNLIT_LEVEL = 0.1;  // what a surface the bake did not light shows: albedo × this, in lit mode
-// (bake/lightmap_image.h kUnlitLight, which image_lightmapped.exr uses: test_view holds the two together)
+// (lightmap/lightmap_image.h kUnlitLight, which image_lightmapped.exr uses: test_view holds the two together)
 
 const report = window.voxlightReport;  // index.html's, which also sees a module that fails to load
 

@@ -1,4 +1,4 @@
-// voxlight bench [scene.gltf | job.json] [-o dir]: speed against error (pipeline/bench/run.h).
+// voxlight bench [scene.gltf | job.json] [-o dir]: speed against error (tools/bench/run.h).
 // Default scene: the Cycles Cornell quad of ../shared/reference, compared with Cycles' 4096-spp
 // lightmap and render, with the lower-spp Cycles files as a second Cycles curve; without
 // ../shared, the project's scenes/cornell_box.gltf against a path-traced reference.

@@ -6,9 +6,9 @@
 #include "tools/voxlight/commands.h"
 
 #include "bake/bake_settings.h"
-#include "bake/dilate.h"
+#include "lightmap/dilate.h"
 #include "bake/job_file.h"
-#include "bake/receivers.h"
+#include "receivers/receivers.h"
 #include "core/atomic_file.h"
 #include "core/diagnostics.h"
 #include "core/error.h"

@@ -5,8 +5,8 @@
 #include "tools/voxlight/commands.h"
 
 #include "core/error.h"
-#include "view/browser_capture.h"
-#include "view/view_server.h"
+#include "viewer/browser_capture.h"
+#include "viewer/view_server.h"
 
 #include <algorithm>
 #include <cstdio>

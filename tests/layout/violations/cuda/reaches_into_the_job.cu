@@ -1,0 +1,3 @@
+// The GPU layer reaching into the job: what the include rules refuse.
+#include "gather/shade_element.h"
+#include "bake/bake.h"

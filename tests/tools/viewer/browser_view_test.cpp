@@ -1,0 +1,342 @@
+// The viewer page in a real browser (headless Chromium, WebGL on SwiftShader) against the
+// bake's own images: what a user sees in `voxlight view` is what the bake computed, and what
+// the bake's lightmap-lit image (lightmap/lightmap_image.h) says it shows.
+#include "bake/bake_job.h"
+#include "lightmap/lightmap_image.h"
+#include "core/image_io.h"
+#include "metrics/metrics.h"
+#include "support/paths.h"
+#include "viewer/browser_capture.h"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+
+using namespace vl;
+namespace fs = std::filesystem;
+
+namespace {
+
+// An 8-bit sRGB PNG as linear light (the page and image.png both write sRGB, clamped).
+Image linearPng(const std::string& path) {
+    int width = 0, height = 0, channels = 0;
+    const std::vector<uint8_t> bytes = readImage8(path, width, height, channels);
+    Image image(width, height, 3);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x)
+            for (int c = 0; c < 3; ++c)
+                image.at(x, y, c) = srgbToLinear(bytes[(size_t(y) * width + x) * channels + size_t(c)] / 255.0f);
+    return image;
+}
+
+// Pixels away from edges: the bake's albedo (image_albedo.exr) is the same across their
+// 5 × 5 neighbourhood, so no material edge or silhouette against another colour is near, and
+// the bake's own image changes by less than `step` between any two neighbours there (a
+// silhouette of white on white, a shadow's edge): where one pixel's footprint straddles two
+// surfaces, the page (one sample at the pixel's centre) and the bake's image need not agree.
+Image awayFromEdges(const Image& albedo, const Image& image, float step) {
+    Image mask(image.width, image.height, 1, 0.0f);
+    for (int y = 2; y + 2 < image.height; ++y)
+        for (int x = 2; x + 2 < image.width; ++x) {
+            bool flat = true;
+            for (int dy = -2; dy <= 2 && flat; ++dy)
+                for (int dx = -2; dx <= 2 && flat; ++dx)
+                    for (int c = 0; c < 3 && flat; ++c) {
+                        flat = std::abs(albedo.at(x + dx, y + dy, c) - albedo.at(x, y, c)) < 1e-3f;
+                        if (dx < 2) {
+                            const float a = image.at(x + dx, y + dy, c), b = image.at(x + dx + 1, y + dy, c);
+                            flat = flat && std::abs(a - b) <= step * std::max({a, b, 1e-3f});
+                        }
+                        if (dy < 2) {
+                            const float a = image.at(x + dx, y + dy, c), b = image.at(x + dx, y + dy + 1, c);
+                            flat = flat && std::abs(a - b) <= step * std::max({a, b, 1e-3f});
+                        }
+                    }
+            mask.at(x, y, 0) = flat ? 1.0f : 0.0f;
+        }
+    return mask;
+}
+
+double coveredFraction(const Image& mask) {
+    double sum = 0.0;
+    for (int y = 0; y < mask.height; ++y)
+        for (int x = 0; x < mask.width; ++x) sum += mask.at(x, y, 0);
+    return sum / (double(mask.width) * mask.height);
+}
+
+// The default scene baked at default settings into out/cornell_box (the README's first bake).
+void bakeDefaultScene(const fs::path& out) {
+    fs::remove_all(out);
+    BakeJob job;
+    job.scenePath = test::sourceDir() + "/scenes/cornell_box.gltf";
+    job.outputDir = (out / "cornell_box").string();
+    job.settings.quiet = true;
+    job.settings.outputs.grids = false;
+    const BakeReport report = runBake(job);
+    INFO(report.error);
+    REQUIRE(report.ok);
+}
+
+// What the page draws of the scene folders below `out`, written to out/NAME and read back
+// in linear light.
+Image capturePage(const fs::path& out, BrowserCapture shot, const std::string& name) {
+    ViewServerOptions options;
+    options.outputFolder = out;
+    options.pageFolder = test::sourceDir() + "/tools/viewer";
+    options.captureFile = out / name;
+    ViewServer server(options);
+    shot.chromium = findChromium();
+    captureInBrowser(server, shot);
+    return linearPng(options.captureFile.string());
+}
+
+// An 8-bit PNG's RGB codes, 3 per pixel.
+std::vector<int> pngCodes(const std::string& path, int& width, int& height) {
+    int channels = 0;
+    const std::vector<uint8_t> bytes = readImage8(path, width, height, channels);
+    std::vector<int> codes(size_t(width) * size_t(height) * 3);
+    for (size_t p = 0; p < size_t(width) * size_t(height); ++p)
+        for (size_t c = 0; c < 3; ++c) codes[3 * p + c] = bytes[p * size_t(channels) + std::min<size_t>(c, size_t(channels) - 1)];
+    return codes;
+}
+
+// How far two 8-bit sRGB images are apart over the masked pixels, in codes (each pixel's
+// largest channel difference).
+struct CodeDifference {
+    double within = 0.0;  // share of the pixels at most kCodeTolerance apart
+    double mean = 0.0;    // mean over pixels and channels
+    int worst = 0;
+};
+
+// The page and the image are both the bake's light through the sRGB curve, quantised once:
+// at a pixel away from edges they differ by float arithmetic (the GPU's, SwiftShader's) and
+// by the rounding to 8 bits, a code at most. Two codes leave room for a driver's rounding.
+constexpr int kCodeTolerance = 2;
+
+CodeDifference codeDifference(const std::vector<int>& a, const std::vector<int>& b, const Image& mask) {
+    CodeDifference d;
+    size_t pixels = 0, within = 0;
+    double sum = 0.0;
+    for (int y = 0; y < mask.height; ++y)
+        for (int x = 0; x < mask.width; ++x) {
+            if (!(mask.at(x, y) > 0.5f)) continue;
+            const size_t p = size_t(y) * size_t(mask.width) + size_t(x);
+            int largest = 0;
+            for (size_t c = 0; c < 3; ++c) {
+                const int diff = std::abs(a[3 * p + c] - b[3 * p + c]);
+                largest = std::max(largest, diff);
+                sum += diff;
+            }
+            d.worst = std::max(d.worst, largest);
+            within += largest <= kCodeTolerance ? 1 : 0;
+            ++pixels;
+        }
+    d.within = pixels ? double(within) / double(pixels) : 0.0;
+    d.mean = pixels ? sum / (3.0 * double(pixels)) : 0.0;
+    return d;
+}
+
+#define VL_SKIP_WITHOUT_CHROMIUM()                                                                      \
+    do {                                                                                                \
+        if (findChromium().empty())                                                                     \
+            VL_SKIP("no chromium on PATH (tools/install-deps.sh installs Debian's chromium)");           \
+    } while (0)
+
+}  // namespace
+
+TEST_CASE("The viewer page in Chromium shows the bake's own image from the scene's camera", "[view][browser]") {
+    // The default scene baked at default settings, shown by the page from its glTF camera at
+    // the image's size: albedo × lightmap (+ emission) must match the bake's image.png within
+    // issue 14's 3% relative RMSE in linear light over pixels away from edges, and the albedo
+    // mode must match the bake's albedo AOV.
+    VL_SKIP_WITHOUT_CHROMIUM();
+    const fs::path out = test::tempDir("view-browser");
+    bakeDefaultScene(out);
+
+    const Image image = readImage((out / "cornell_box" / "image.exr").string());
+    const Image albedo = readImage((out / "cornell_box" / "image_albedo.exr").string());
+    const Image mask = awayFromEdges(albedo, image, 0.15f);
+    INFO("pixels compared: " << coveredFraction(mask));
+    CHECK(coveredFraction(mask) > 0.6);
+
+    auto capture = [&](const std::string& mode, bool threeMaterials) {
+        BrowserCapture shot;
+        shot.scene = "cornell_box";
+        shot.mode = mode;
+        shot.width = image.width;
+        shot.height = image.height;
+        shot.threeMaterials = threeMaterials;
+        return capturePage(out, shot, "canvas_" + mode + (threeMaterials ? "_three" : "") + ".png");
+    };
+
+    const Image lit = capture("lit", false);
+    REQUIRE(lit.width == image.width);
+    REQUIRE(lit.height == image.height);
+    MetricOptions options;
+    options.mask = &mask;
+    options.testName = "page";
+    options.referenceName = "image.png";
+    const ErrorMetrics litError = compareImages(lit, linearPng((out / "cornell_box" / "image.png").string()), options);
+    INFO("lit: relative RMSE " << litError.relativeRmse << ", means " << litError.meanTest[0] << " / "
+                               << litError.meanReference[0]);
+    CHECK(litError.relativeRmse < 0.03);
+
+    // The README's recipe for one's own three.js scene (tools/viewer/moz_lightmap.js: three.js'
+    // basic material, the RGBM decode spliced in before its bilinear filter) holds the same bound.
+    const ErrorMetrics threeError = compareImages(capture("lit", true),
+                                                  linearPng((out / "cornell_box" / "image.png").string()), options);
+    INFO("three.js materials: relative RMSE " << threeError.relativeRmse << ", means " << threeError.meanTest[0]
+                                              << " / " << threeError.meanReference[0]);
+    CHECK(threeError.relativeRmse < 0.03);
+
+    const ErrorMetrics albedoError = compareImages(capture("albedo", false), albedo, options);
+    INFO("albedo: relative RMSE " << albedoError.relativeRmse);
+    CHECK(albedoError.relativeRmse < 0.01);
+}
+
+TEST_CASE("The viewer page as a user sees it, controls and all, shows the same view as its capture", "[view][browser]") {
+    // The whole page (Chromium's screenshot through the DevTools protocol: the panel, the
+    // orbit controls placed at the glTF camera, antialiasing on) against the canvas capture
+    // at the same size, right of the panel and above the VR button. The screenshot is the
+    // README's (tools/viewer/screenshot.png is a copy of build/test-output/view-page/cornell_box/page.png).
+    VL_SKIP_WITHOUT_CHROMIUM();
+    const fs::path out = test::tempDir("view-page");
+    bakeDefaultScene(out);
+    constexpr int width = 960, height = 540;
+    auto shoot = [&](bool wholePage) {
+        BrowserCapture shot;
+        shot.width = width;
+        shot.height = height;
+        shot.wholePage = wholePage;
+        return capturePage(out / "cornell_box", shot, wholePage ? "page.png" : "canvas.png");
+    };
+    const Image canvas = shoot(false), page = shoot(true);
+    REQUIRE(page.width == width);
+    REQUIRE(page.height == height);
+    // Right of the panel (it ends at 274 px), above the VR button (from 480 px), away from edges.
+    Image region = awayFromEdges(Image(width, height, 3, 1.0f), canvas, 0.15f);  // no albedo AOV at this size
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x)
+            if (x < 300 || y > 460) region.at(x, y, 0) = 0.0f;
+    INFO("pixels compared: " << coveredFraction(region));
+    REQUIRE(coveredFraction(region) > 0.3);
+    MetricOptions options;
+    options.mask = &region;
+    const ErrorMetrics error = compareImages(page, canvas, options);
+    INFO("page against canvas: relative RMSE " << error.relativeRmse);
+    CHECK(error.relativeRmse < 0.03);
+}
+
+TEST_CASE("The viewer page in Chromium shows the bake's lightmap-lit image, code for code", "[view][browser]") {
+    // The default scene with two lightmaps (the walls in an atlas group of their own) and a
+    // block left without TEXCOORD_1 (no lightmap: the viewer's unlit level), baked at 128 × 128;
+    // the page's capture at exposure 0 against image_lightmapped.png, which the bake encodes as
+    // the page does (the sRGB curve, clamped, 8 bits). Pixels away from edges (the page reads
+    // one point at a pixel's centre, the bake its 4 × 4 rays) must be within kCodeTolerance
+    // codes, and their mean difference under a quarter of a code. The same comparison with the
+    // image a page would show that read the lightmap upside down, or did not read it, fails by far.
+    VL_SKIP_WITHOUT_CHROMIUM();
+    const fs::path out = test::tempDir("view-lightmapped");
+    fs::remove_all(out);
+    const fs::path input = out / "input";
+    fs::create_directories(input);
+    fs::copy_file(test::sourceDir() + "/scenes/cornell_box.bin", input / "cornell_box.bin");
+    nlohmann::json gltf = nlohmann::json::parse(std::ifstream(test::sourceDir() + "/scenes/cornell_box.gltf"));
+    bool stripped = false;
+    for (nlohmann::json& mesh : gltf["meshes"])
+        if (mesh["name"] == "TallBlock")
+            for (nlohmann::json& primitive : mesh["primitives"]) stripped = primitive["attributes"].erase("TEXCOORD_1") > 0;
+    REQUIRE(stripped);
+    std::ofstream(input / "cornell_box.gltf") << gltf.dump();
+
+    BakeJob job;
+    job.scenePath = (input / "cornell_box.gltf").string();
+    job.outputDir = (out / "box").string();
+    job.settings.quiet = true;
+    job.settings.outputs.grids = false;
+    job.settings.generateLightmapUvs = false;
+    job.settings.imageWidth = job.settings.imageHeight = 128;
+    AtlasGroup walls;
+    walls.name = "walls";
+    walls.meshes = {"RedWall", "GreenWall"};
+    walls.width = walls.height = 64;
+    job.settings.lightmap.atlases = {walls};
+    const BakeReport report = runBake(job);
+    INFO(report.error);
+    REQUIRE(report.ok);
+    const fs::path baked = out / "box";
+    REQUIRE(fs::exists(baked / "walls.exr"));
+
+    BrowserCapture shot;
+    shot.scene = "box";
+    shot.width = shot.height = 128;
+    capturePage(out, shot, "canvas_lit.png");
+    int width = 0, height = 0;
+    const std::vector<int> page = pngCodes((out / "canvas_lit.png").string(), width, height);
+    REQUIRE(width == 128);
+    REQUIRE(height == 128);
+    const std::vector<int> expected = pngCodes((baked / "image_lightmapped.png").string(), width, height);
+    const Image lit = readImage((baked / "image_lightmapped.exr").string());
+    const Image mask = awayFromEdges(readImage((baked / "image_albedo.exr").string()), lit, 0.15f);
+    INFO("pixels compared: " << coveredFraction(mask));
+    CHECK(coveredFraction(mask) > 0.5);
+    const CodeDifference difference = codeDifference(page, expected, mask);
+    INFO("page against image_lightmapped.png: " << 100.0 * difference.within << "% of pixels within "
+                                                << kCodeTolerance << " codes, mean " << difference.mean << ", worst "
+                                                << difference.worst);
+    CHECK(difference.worst <= kCodeTolerance);
+    CHECK(difference.mean < 0.25);
+
+    // The unlit block is in the comparison: the page and the image agree on the unlit level.
+    // (Its pixels are the ones whose albedo is white and whose light is kUnlitLight.)
+    const Image albedo = readImage((baked / "image_albedo.exr").string());
+    size_t unlitPixels = 0;
+    for (int y = 0; y < lit.height; ++y)
+        for (int x = 0; x < lit.width; ++x)
+            if (mask.at(x, y) > 0.5f && albedo.at(x, y, 0) > 0.7f &&
+                std::abs(lit.at(x, y, 0) - albedo.at(x, y, 0) * kUnlitLight) < 1e-4f)
+                ++unlitPixels;
+    INFO("unlit pixels compared: " << unlitPixels);
+    CHECK(unlitPixels > 100);
+
+    // What a page that read the lightmap upside down, or not at all, would show: the bake's
+    // lightmap-lit image made again from the same rays with the lightmaps flipped in v, or with
+    // none. The scene is the one the bake lit (turned, anchored, its atlases), from its voxel stages.
+    Diagnostics diagnostics(false, false);
+    Scene scene = loadJobScene(job);
+    VoxelStages stages = bakeVoxelStages(scene, job.settings, diagnostics);
+    std::vector<ShippedLightmap> shipped, flipped;
+    for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics)) {
+        const Image texels = shippedLightmapTexels(readImage((baked / (atlas.name + ".exr")).string()));
+        Image upsideDown = texels;
+        for (int y = 0; y < texels.height; ++y)
+            for (int x = 0; x < texels.width; ++x) upsideDown.setRgb(x, texels.height - 1 - y, texels.rgb(x, y));
+        shipped.push_back({atlas.meshes, texels});
+        flipped.push_back({atlas.meshes, upsideDown});
+    }
+    REQUIRE(shipped.size() == 2);
+    const std::vector<Camera> cameras = bakeCameras(scene, job.settings);
+    REQUIRE(cameras.size() == 1);
+    const CameraModel model = makeCameraModel(cameras[0], job.settings.imageWidth, job.settings.imageHeight);
+    const auto render = [&](const std::vector<ShippedLightmap>& lightmaps) {
+        return bakeLightmapImage(stages.tracing->traceScene, stages.tracing->bvh, model, scene, stages.tracing->triangles,
+                                 job.settings, lightmaps);
+    };
+    // The same scene and rays as the bake's: its own image again.
+    const Image again = render(shipped);
+    REQUIRE(again.pixels.size() == lit.pixels.size());
+    for (size_t k = 0; k < lit.pixels.size(); ++k) REQUIRE(again.pixels[k] == Approx(lit.pixels[k]).margin(1e-6));
+    for (const auto& [name, lightmaps] : {std::pair<std::string, std::vector<ShippedLightmap>>{"v flipped", flipped},
+                                          {"no lightmap", {}}}) {
+        const std::string png = (out / ("wrong_" + std::to_string(name.size()) + ".png")).string();
+        writePngSrgb(render(lightmaps), png);
+        const CodeDifference wrong = codeDifference(page, pngCodes(png, width, height), mask);
+        INFO(name << ": " << 100.0 * wrong.within << "% of pixels within " << kCodeTolerance << " codes, mean "
+                  << wrong.mean << ", worst " << wrong.worst);
+        CHECK(wrong.within < 0.5);
+        CHECK(wrong.mean > 5.0);
+    }
+}
