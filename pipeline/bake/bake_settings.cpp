@@ -110,8 +110,12 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
                  throw SettingsError("setting lightmap-gather = '" + v + "' is not one of texels, points");
              s.gather.lightmapGather = v == "texels" ? LightmapGather::Texels : LightmapGather::Points;
          }},
-        {"texel-gather-spacing", "texels between a lightmap's gather records; 0: about 1.5 voxels (default 0)",
+        {"texel-gather-spacing", "texels between a lightmap's gather records; 0: about 0.6 voxels (default 0)",
          [](S& s, const std::string& v) { s.gather.texelGatherSpacing = parseIntSetting("texel-gather-spacing", v, 0, 64); }},
+        {"texel-gather-rays", "rays per axis of each lightmap gather record's n x n fan; 0: 8 (default 0)",
+         [](S& s, const std::string& v) { s.gather.texelGatherRays = parseIntSetting("texel-gather-rays", v, 0, kMaxGatherRaysPerAxis); }},
+        {"lightmap-seed", "turns the lightmap records' rays and draws: two bakes at two seeds differ by the lightmap's noise (default 0)",
+         [](S& s, const std::string& v) { s.gather.lightmapSeed = parseIntSetting("lightmap-seed", v, 0, 1 << 30); }},
         {"lightmap-side", "which side of a double-sided surface its lightmap texels hold: inside (the side that sees less open sky, what a person in the room sees, never the inside of a closed solid, and a side facing the open space the scene's cameras stand in is never taken for one; a thin window frame whose front faces out is lit from the room) or front (the triangles' winding) (default inside)",
          [](S& s, const std::string& v) { s.lightmapSide = parseLightmapSide(v); }},
         {"lightmap-filter", "passes of the edge-stopping filter over a lightmap's gather records, each twice as wide (records one surface holds, whose difference their noise explains, are averaged); 0: off (default 3)",
@@ -266,7 +270,8 @@ std::string describeBakeSettings(const BakeSettings& s) {
         << ", gather-visibility=" << toString(s.gather.visibility) << ", gather-rays=" << s.gather.gatherRays
         << ", bounce-rays=" << s.gather.bounceRays << ", bounce-gather-level=" << s.gather.bounceGatherLevel
         << ", lightmap-gather=" << (s.gather.lightmapGather == LightmapGather::Texels ? "texels" : "points")
-        << ", texel-gather-spacing=" << s.gather.texelGatherSpacing << ", lightmap-filter=" << s.gather.lightmapFilterPasses
+        << ", texel-gather-spacing=" << s.gather.texelGatherSpacing << ", texel-gather-rays=" << s.gather.texelGatherRays
+        << ", lightmap-seed=" << s.gather.lightmapSeed << ", lightmap-filter=" << s.gather.lightmapFilterPasses
         << ", lightmap-res="
         << (s.lightmap.autoResolution ? std::string("auto") : std::to_string(s.lightmap.width))
         << ", lightmap-subsamples=" << s.lightmap.subsamplesPerAxis << ", emitter-strata=" << s.direct.emitterStrata

@@ -212,7 +212,8 @@ ReceiverLighting ReceiverGather::atlasRows(const LightmapAtlas& given, int rowBe
         progress.finish();
         TexelGatherSettings texels;
         texels.spacing = settings_.texelGatherSpacing;
-        texels.raysPerAxis = settings_.gatherRays;
+        texels.raysPerAxis = settings_.texelGatherRays;
+        texels.seed = uint64_t(settings_.lightmapSeed);
         texels.brightSamples = settings_.brightPatches.samples;
         texels.skyDrawsPerAxis = direct_.skyStrata;
         texels.filterPasses = settings_.lightmapFilterPasses;

@@ -47,6 +47,10 @@ struct GatherSettings {
     float nearFieldVoxels = 3.0f;
     LightmapGather lightmapGather = LightmapGather::Texels;
     int texelGatherSpacing = 0;     // texels between lightmap records; 0: chosen (gather/texel_gather.h)
+    int texelGatherRays = 0;        // each lightmap record's n × n fan; 0: chosen (gather/texel_gather.h)
+    // Turns the lightmap records' fans and draws: two bakes at two seeds differ by the
+    // lightmap's noise alone.
+    int lightmapSeed = 0;
     int lightmapFilterPasses = 3;   // the records' edge-stopping filter; 0: off
     bool lightmapGradients = true;  // the records' rotation gradients
 };

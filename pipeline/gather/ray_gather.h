@@ -28,7 +28,7 @@ namespace vl {
 class Progress;
 
 // How deep a near field's path goes before it reads the voxels (FanExtras::nearField).
-inline constexpr int kNearFieldBounces = 8;
+inline constexpr int kNearFieldBounces = 4;
 
 // E at every point (W/m²) from raysPerAxis² rays (1 … kMaxGatherRaysPerAxis, else
 // SettingsError).

@@ -9,6 +9,8 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 
 namespace vl {
@@ -21,10 +23,17 @@ constexpr float kRecordReach = 2.0f;
 // Cosine between a sample's normal and a record's, below which they are not one surface.
 constexpr float kRecordFacing = 0.7f;
 // The filter's luminance stop: records apart by more than this many standard deviations of
-// their noise are not averaged (SVGF's σ_l).
+// their difference's noise are not averaged (SVGF's σ_l).
 constexpr float kNoiseStops = 4.0f;
 // The filter's normal stop: cos^k between two records' normals (SVGF's σ_n).
 constexpr int kNormalPower = 32;
+// Records about this many voxels apart by default: the light in shade changes within a voxel
+// at creases and corners, and more records of fewer rays each, filtered, follow it closer for
+// the same noise (docs/accuracy.md, "Records closer, of fewer rays").
+constexpr float kRecordSpacingVoxels = 0.6f;
+// Rays per axis of a record's fan by default: the filter averages a record with its neighbours,
+// so past 8 × 8 rays a record buys little of the error.
+constexpr int kAutoRecordRays = 8;
 
 struct Record {
     SurfaceSample sample;
@@ -103,11 +112,11 @@ void gatherRecords(std::vector<Record>& records, size_t first, int width, const 
         if (glm::length(tangent) > 1e-12f) tangent = glm::normalize(tangent);
         else orthonormalBasis(r.sample.normal, tangent, bitangent);
         const double turn = double(r.texel % size_t(width)) * 0.7548776662466927 +
-                            double(r.texel / size_t(width)) * 0.5698402909980532;
+                            double(r.texel / size_t(width)) * 0.5698402909980532 + double(settings.seed) * 0.3819660112501051;
         fans[k].origin = offsetRayOrigin(r.sample.position, r.ng, bvh.extent);
         fans[k].frame = fanFrame(r.sample.normal, tangent, float(turn - std::floor(turn)));
-        fans[k].seed = r.seed;
-        Pcg32 rng(r.seed, 0x7e7e1);
+        fans[k].seed = r.seed + settings.seed * 0x9E3779B97F4A7C15ull;
+        Pcg32 rng(fans[k].seed, 0x7e7e1);
         rng.next2D(fans[k].jitter.x, fans[k].jitter.y);
     });
     FanExtras extras;
@@ -136,7 +145,11 @@ int texelGatherSpacing(const LightmapAtlas& atlas, float voxelSize, const TexelG
     if (settings.spacing > 0) return settings.spacing;
     const float size = texelWorldSize(atlas);
     if (!(size > 0.0f)) return 1;
-    return std::clamp(int(std::lround(1.5f * voxelSize / size)), 1, 8);
+    return std::clamp(int(std::lround(kRecordSpacingVoxels * voxelSize / size)), 1, 8);
+}
+
+int texelGatherRays(const TexelGatherSettings& settings) {
+    return settings.raysPerAxis > 0 ? settings.raysPerAxis : kAutoRecordRays;
 }
 
 TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowEnd, const Image* direct,
@@ -153,6 +166,8 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
     if (rowBegin == rowEnd || mips.levelCount <= 0) return out;
     const int s = texelGatherSpacing(atlas, mips.voxelSize, settings);
     const float texelSize = std::max(texelWorldSize(atlas), 1e-6f);
+    TexelGatherSettings gather = settings;
+    gather.raysPerAxis = texelGatherRays(settings);
     const float reach = kRecordReach * float(s) * texelSize;
     const int half = s / 2;
     const auto compatible = [&](const SurfaceSample& a, const Record& r) {
@@ -164,7 +179,8 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
     // The lattice: node (i, j) at texel (half + i·s, half + j·s). Its records cover the rows the
     // band's texels interpolate from and, past them, as far as the filter's passes read.
     const int passes = std::max(0, settings.filterPasses);
-    const int filterReach = passes > 0 ? 2 * ((1 << passes) - 1) : 0;  // lattice steps
+    // Lattice steps: a pass reads its neighbours 2 steps out and their sums of weights, 2 more.
+    const int filterReach = passes > 0 ? 4 * ((1 << passes) - 1) : 0;
     const int columns = (W - half + s - 1) / s;
     const int jBegin = std::max(0, (rowBegin - half) / s - 1 - filterReach);
     const int jEnd = std::min((H - half + s - 1) / s, (rowEnd - half) / s + 2 + filterReach);
@@ -183,7 +199,7 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
             records.push_back(r);
         }
     const size_t latticeRecords = records.size();
-    gatherRecords(records, 0, W, mips, faces, bright, bvh, scene, settings);
+    gatherRecords(records, 0, W, mips, faces, bright, bvh, scene, gather);
     const auto nodeAt = [&](int i, int j) -> int32_t {
         if (i < 0 || i >= columns || j < jBegin || j >= jEnd) return -1;
         return node[size_t(j - jBegin) * size_t(columns) + size_t(i)];
@@ -191,10 +207,50 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
 
     // The edge-stopping filter over the lattice's records, pass p at a step of 2^p nodes, each
     // reading the 5 × 5 nodes of its step (the B3 spline's weights) that lie on the record's
-    // surface and whose light its noise explains; the variance goes through as Σ w² σ² / (Σ w)².
+    // surface and whose light their noise explains; the variance goes through as Σ a² σ².
+    // The weight of two records in pass `step` at lattice offset (di, dj): the kernel's, times
+    // how far they lie on one surface (within reach of their lattice distance, in each other's
+    // plane, facing one way) and their difference against its noise, both records' variances.
+    // The record's own variance alone let a lucky bright record (its spread large) take its
+    // neighbours' light while an unlucky dark one (its spread small) refused theirs, and the
+    // filter darkened the lightmap (docs/accuracy.md, "The filter's stop"). The same both ways.
+    constexpr float kernel[3] = {3.0f / 8.0f, 1.0f / 4.0f, 1.0f / 16.0f};
+    const auto pairWeight = [&](const Record& rp, const Record& rq, int di, int dj, int step) {
+        const vec3 d = rq.sample.position - rp.sample.position;
+        const float apart = (std::sqrt(float(di * di + dj * dj)) * float(step) + 1.0f) * reach;
+        if (glm::dot(d, d) > apart * apart) return 0.0f;
+        const float offPlane = std::max(glm::abs(glm::dot(d, rp.sample.normal)), glm::abs(glm::dot(d, rq.sample.normal)));
+        if (offPlane > 0.25f * reach + 0.1f * glm::length(d)) return 0.0f;
+        const float facing = glm::dot(rp.sample.normal, rq.sample.normal);
+        if (!(facing > kRecordFacing)) return 0.0f;
+        const float lp = meanOf(rp.indirect + rp.sky), lq = meanOf(rq.indirect + rq.sky);
+        const float stop = kNoiseStops * std::sqrt(std::max(rp.variance, 0.0f) + std::max(rq.variance, 0.0f)) +
+                           1e-6f * (std::max(lp, lq) + 1e-6f);
+        return kernel[std::abs(di)] * kernel[std::abs(dj)] * std::pow(facing, float(kNormalPower)) *
+               std::exp(-std::abs(lp - lq) / stop);
+    };
     for (int pass = 0; pass < passes; ++pass) {
         const int step = 1 << pass;
-        constexpr float kernel[3] = {3.0f / 8.0f, 1.0f / 4.0f, 1.0f / 16.0f};
+        // Each record's sum of weights, itself included.
+        std::vector<float> weightSum(latticeRecords, 0.0f);
+        tbb::parallel_for(jBegin, jEnd, [&](int j) {
+            for (int i = 0; i < columns; ++i) {
+                const int32_t p = nodeAt(i, j);
+                if (p < 0 || records[size_t(p)].buried) continue;
+                float total = 0.0f;
+                for (int dj = -2; dj <= 2; ++dj)
+                    for (int di = -2; di <= 2; ++di) {
+                        const int32_t q = nodeAt(i + di * step, j + dj * step);
+                        if (q >= 0 && !records[size_t(q)].buried)
+                            total += pairWeight(records[size_t(p)], records[size_t(q)], di, dj, step);
+                    }
+                weightSum[size_t(p)] = total;
+            }
+        });
+        // A record takes w / max(W_p, W_q) of each neighbour's difference from it: the same
+        // share both ways, so what one gains the other loses and the filter keeps the records'
+        // sum (a bright record's wide spread accepts more neighbours, and normalising each by
+        // its own sum W_p brightened the lightmap), and never more than W_p: a mean.
         std::vector<vec3> indirect(latticeRecords), sky(latticeRecords);
         std::vector<float> variance(latticeRecords);
         std::vector<RotationGradients> rotation(settings.gradients ? latticeRecords : 0);
@@ -203,45 +259,32 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
                 const int32_t p = nodeAt(i, j);
                 if (p < 0) continue;
                 const Record& rp = records[size_t(p)];
-                if (rp.buried) {
-                    indirect[size_t(p)] = rp.indirect;
-                    sky[size_t(p)] = rp.sky;
-                    variance[size_t(p)] = rp.variance;
-                    if (settings.gradients) rotation[size_t(p)] = rp.rotation;
-                    continue;
-                }
-                const float lp = meanOf(rp.indirect + rp.sky);
-                const float stop = kNoiseStops * std::sqrt(std::max(rp.variance, 0.0f)) + 1e-6f * (lp + 1e-6f);
                 vec3 sumIndirect(0.0f), sumSky(0.0f);
-                float total = 0.0f, sumVariance = 0.0f;
+                float taken = 0.0f, sumVariance = 0.0f;
                 RotationGradients sumRotation;
-                for (int dj = -2; dj <= 2; ++dj)
-                    for (int di = -2; di <= 2; ++di) {
-                        const int32_t q = nodeAt(i + di * step, j + dj * step);
-                        if (q < 0) continue;
-                        const Record& rq = records[size_t(q)];
-                        if (rq.buried) continue;
-                        // One surface: within reach of its lattice distance, in its plane, facing its way.
-                        const vec3 d = rq.sample.position - rp.sample.position;
-                        const float apart = (std::sqrt(float(di * di + dj * dj)) * float(step) + 1.0f) * reach;
-                        if (glm::dot(d, d) > apart * apart) continue;
-                        if (glm::abs(glm::dot(d, rp.sample.normal)) > 0.25f * reach + 0.1f * glm::length(d)) continue;
-                        const float facing = glm::dot(rp.sample.normal, rq.sample.normal);
-                        if (!(facing > kRecordFacing)) continue;
-                        const float lq = meanOf(rq.indirect + rq.sky);
-                        const float w = kernel[std::abs(di)] * kernel[std::abs(dj)] * std::pow(facing, float(kNormalPower)) *
-                                        std::exp(-std::abs(lp - lq) / stop);
-                        sumIndirect += w * rq.indirect;
-                        sumSky += w * rq.sky;
-                        sumVariance += w * w * rq.variance;
-                        total += w;
-                        sumRotation.light += w * rq.rotation.light;
-                        sumRotation.sky += w * rq.rotation.sky;
-                    }
-                indirect[size_t(p)] = sumIndirect / total;
-                sky[size_t(p)] = sumSky / total;
-                variance[size_t(p)] = sumVariance / (total * total);
-                if (settings.gradients) rotation[size_t(p)] = {sumRotation.light / total, sumRotation.sky / total};
+                if (!rp.buried)
+                    for (int dj = -2; dj <= 2; ++dj)
+                        for (int di = -2; di <= 2; ++di) {
+                            const int32_t q = nodeAt(i + di * step, j + dj * step);
+                            if (q < 0 || q == p) continue;
+                            const Record& rq = records[size_t(q)];
+                            if (rq.buried) continue;
+                            const float w = pairWeight(rp, rq, di, dj, step);
+                            if (!(w > 0.0f)) continue;
+                            const float share = w / std::max(weightSum[size_t(p)], weightSum[size_t(q)]);
+                            sumIndirect += share * rq.indirect;
+                            sumSky += share * rq.sky;
+                            sumVariance += share * share * rq.variance;
+                            sumRotation.light += share * rq.rotation.light;
+                            sumRotation.sky += share * rq.rotation.sky;
+                            taken += share;
+                        }
+                const float own = 1.0f - taken;
+                indirect[size_t(p)] = own * rp.indirect + sumIndirect;
+                sky[size_t(p)] = own * rp.sky + sumSky;
+                variance[size_t(p)] = own * own * rp.variance + sumVariance;
+                if (settings.gradients)
+                    rotation[size_t(p)] = {own * rp.rotation.light + sumRotation.light, own * rp.rotation.sky + sumRotation.sky};
             }
         });
         for (size_t k = 0; k < latticeRecords; ++k) {
@@ -323,7 +366,7 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
         for (BlockUse& use : blockUse[b]) use.record += first;
         records.insert(records.end(), blockRecords[b].begin(), blockRecords[b].end());
     }
-    gatherRecords(records, latticeRecords, W, mips, faces, bright, bvh, scene, settings);
+    gatherRecords(records, latticeRecords, W, mips, faces, bright, bvh, scene, gather);
 
     // A block's record may be buried where some samples sharing it are not (a wall's texels
     // beside the foot of a panel hung on it): those take records of their own, shared as before.
@@ -355,7 +398,7 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
         for (const auto& [u, r] : reopenedUse[b]) blockUse[b][u].record = first + r;
         records.insert(records.end(), reopened[b].begin(), reopened[b].end());
     }
-    if (records.size() > firstReopened) gatherRecords(records, firstReopened, W, mips, faces, bright, bvh, scene, settings);
+    if (records.size() > firstReopened) gatherRecords(records, firstReopened, W, mips, faces, bright, bvh, scene, gather);
 
     // Each sample: its lattice records, bilinearly, else its block's record.
     tbb::parallel_for(rowBegin, rowEnd, [&](int y) {

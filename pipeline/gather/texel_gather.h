@@ -24,8 +24,8 @@
 namespace vl {
 
 struct TexelGatherSettings {
-    int spacing = 0;         // texels between records; 0: about 1.5 voxels in the atlas's texels (1 … 8)
-    int raysPerAxis = 14;    // each record's n × n fan
+    int spacing = 0;         // texels between records; 0: texelGatherSpacing's choice (1 … 8)
+    int raysPerAxis = 0;     // each record's n × n fan; 0: texelGatherRays's choice
     int brightSamples = 64;  // the bright patches' shadow rays per record
     int filterPasses = 3;    // the edge-stopping filter's passes over the lattice (steps 1, 2, 4 …); 0: none
     bool gatherSky = true;     // the records gather the sky's direct light; false: the caller lights samples by it
@@ -36,6 +36,7 @@ struct TexelGatherSettings {
     // Each sample takes its records' light turned to its own normal by their rotation
     // gradients (gather/ray_gather.h RotationGradients, smoothed by the filter as their light is).
     bool gradients = true;
+    uint64_t seed = 0;  // turns the records' fans and draws (BakeSettings::lightmapSeed)
 };
 
 struct TexelGather {
@@ -69,8 +70,11 @@ TexelGather gatherAtlasTexels(const LightmapAtlas& atlas, int rowBegin, int rowE
                               const MipView& mips, const std::vector<FaceRadiance>& faces, const BrightPatchSplit& bright,
                               const BvhView& bvh, const TraceSceneView& scene, const TexelGatherSettings& settings);
 
-// The spacing the atlas's records take for `settings.spacing` 0: about 1.5 voxels of the texels'
+// The spacing the atlas's records take for `settings.spacing` 0: about 0.6 voxels of the texels'
 // median size in the scene (1 … 8).
 int texelGatherSpacing(const LightmapAtlas& atlas, float voxelSize, const TexelGatherSettings& settings);
+
+// The rays per axis of each record's fan: `settings.raysPerAxis`, or for 0 the default 8.
+int texelGatherRays(const TexelGatherSettings& settings);
 
 }  // namespace vl

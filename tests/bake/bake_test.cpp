@@ -284,6 +284,9 @@ double whiteBoxIndirectPowerRatio(const Scene& scene, int resolution, int lightm
     settings.lightmap.width = settings.lightmap.height = lightmapSize;
     settings.gather.bounces = bounces;
     settings.gather.bounceTail = bounces > 1;
+    // The near field traces a record's near hits on past their first bounce: the first gather
+    // alone goes without it.
+    if (bounces == 0) settings.gather.nearFieldVoxels = 0.0f;
     Diagnostics diagnostics(false, false);
     const BakeResult result = bake(scene, settings, diagnostics);
     double indirectPower = 0.0;  // Σ_faces mean(E/π)·π·area, every face 1 m²
@@ -301,7 +304,7 @@ TEST_CASE("A closed white box's indirect power stays near energy conservation at
     // The box is centred on a voxel corner, so with N = 41, 43, … 55 voxels across it its walls
     // fall in each of the 4 voxels of their level-2 gather cells twice over, and each surface
     // ends inside a cell in a strip 1 to 4 voxels wide. Measured (level 2): the series
-    // 0.971–1.004 of the exact value, the first gather alone 0.997–1.005 of Φρ. The gather
+    // 0.970–0.992 of the exact value, the first gather alone 0.985–0.986 of Φρ. The gather
     // points weigh by the surface they stand for (irradiance_cache.h, the points' mass), so
     // the bounces neither create nor lose energy by where the walls sit. The bounds are the
     // measurements with a point or two to spare; they are not a derived limit.
@@ -320,12 +323,14 @@ TEST_CASE("A closed white box's indirect power stays near energy conservation at
                          << " … " << highest[1] << " (mean " << sum[1] << ")");
     // Over the eight alignments the errors must not all lean one way (measured means 1.003 and
     // 0.992 at level 2): the emitter's black back takes a little, so the exact value lies just
-    // under 1.
-    CHECK(sum[0] < 1.015);
+    // under 1. The first gather: the lamp's two faces, 0.08 of the 6.08 m² that light lands on,
+    // take about their share of it, so about 0.987 of Φρ reaches the walls. Its mean over the
+    // alignments is held within 1.2% of that (docs/accuracy.md, "The filter's stop").
+    CHECK(sum[0] == Approx(0.987).epsilon(0.012));
     CHECK(sum[1] < 1.01);
     CHECK(sum[1] > 0.98);
-    CHECK(lowest[0] > 0.99);
-    CHECK(highest[0] < 1.04);
+    CHECK(lowest[0] > 0.97);
+    CHECK(highest[0] < 1.01);
     CHECK(lowest[1] > 0.95);
     CHECK(highest[1] < 1.04);
     CHECK(highest[1] - lowest[1] < 0.07);
