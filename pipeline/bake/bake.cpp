@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <unistd.h>
 
 namespace vl {
@@ -80,8 +81,11 @@ void checkLightAttenuationNames(const Scene& scene, const LightingSettings& ligh
 
 double estimateBakeMemory(const Scene& scene, const BakeSettings& settings, double voxelSize) {
     // A voxel costs ~100 bytes of channels, as much again in voxelization fragments, and ~50
-    // in mips. A receiver sample costs ~48 bytes, a texel or pixel ~64 per image kept.
+    // in mips. A receiver sample costs ~48 bytes, a texel or pixel ~64 per image kept. A
+    // triangle ~300: the scene's own, the receivers' BVH and traced scene, and the
+    // voxelization's fragments while they last (docs/speed.md, "How the stages scale").
     const double voxels = estimatedVoxels(scene, voxelSize);
+    const double triangles = static_cast<double>(scene.triangleCount()) * 300.0;
     const double texels = settings.outputs.lightmaps
         ? settings.lightmap.maxTexels() *
               (48.0 * settings.lightmap.subsamplesPerAxis * settings.lightmap.subsamplesPerAxis + 64.0 * 6)
@@ -90,7 +94,16 @@ double estimateBakeMemory(const Scene& scene, const BakeSettings& settings, doub
         ? static_cast<double>(settings.imageWidth) * settings.imageHeight *
               (48.0 * settings.imageSubsamples * settings.imageSubsamples + 64.0 * 8)
         : 0.0;
-    return voxels * 250.0 + texels + pixels;
+    return voxels * 250.0 + triangles + texels + pixels;
+}
+
+void checkSceneMemoryBudget(const Scene& scene, const BakeSettings& settings, double available) {
+    const double estimate = estimateBakeMemory(scene, settings, std::numeric_limits<double>::infinity());
+    if (estimate > available)
+        throw SettingsError(scene.sourcePath + ": its " + std::to_string(scene.triangleCount()) +
+                            " triangles, lightmaps and images alone would need about " + gib(estimate) +
+                            " of memory but " + gib(available) +
+                            " is available: lower lightmap-res or the image size, or split the scene");
 }
 
 void checkMemoryBudget(const Scene& scene, const BakeSettings& settings, double voxelSize) {
@@ -187,6 +200,9 @@ VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnost
     // Into its own frame before anything is sized: a resolution, the free paths' count and
     // the gather cells' alignment are then along the grid's axes.
     if (settings.voxel.ownFrame) turnToOwnFrame(scene);
+    // Before the voxel size, whose rays need the scene's BVH: a scene too large for the
+    // machine is refused in a moment, not after its slow stages.
+    checkSceneMemoryBudget(scene, settings, availableMemoryBytes());
     result.voxelSizeChoice = timed(result.stages, "voxel size", [&] { return chooseVoxelSize(scene, settings); });
     const VoxelSizeChoice& choice = result.voxelSizeChoice;
     VoxelSettings voxelSettings = settings.voxel;

@@ -144,11 +144,17 @@ void addLightmapImages(const Scene& scene, const ReceiverScene& tracing, const B
 BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnostics);
 
 // What a bake of `scene` with `settings` at `voxelSize` is estimated to take: voxels,
-// receivers and images (against core/memory.h availableMemoryBytes).
+// triangles, receivers and images (against core/memory.h availableMemoryBytes); an infinite
+// voxel size counts no voxels.
 double estimateBakeMemory(const Scene& scene, const BakeSettings& settings, double voxelSize);
 
 // Refuses, before any work, a bake whose estimated memory exceeds what the machine has
 // available (SettingsError with both figures).
 void checkMemoryBudget(const Scene& scene, const BakeSettings& settings, double voxelSize);
+
+// Refuses, before the voxel size is chosen, a scene whose triangles, lightmaps and images alone
+// (no voxels yet) would need more than `available` bytes (SettingsError naming the file and
+// the triangles, with both figures).
+void checkSceneMemoryBudget(const Scene& scene, const BakeSettings& settings, double available);
 
 }  // namespace vl

@@ -91,7 +91,7 @@ Image renderLightmapImage(const CameraReceivers& camera, const TraceScene& trace
                         const uint32_t m = triangles.meshIndex[hit.triangle];
                         if (lightmapOf[m] >= 0) {
                             const vec2 uv = lightmapUvAt(scene.meshes[m], triangles.localIndex[hit.triangle],
-                                                         &triangles.vertices[3 * size_t(hit.triangle)], h.position);
+                                                         view.vertices + 3 * size_t(hit.triangle), h.position);
                             light = sampleLightmap(lightmaps[size_t(lightmapOf[m])].texels, uv);
                         }
                         reflected += weight * baseColorAt(view, h) * light;

@@ -58,7 +58,7 @@ class TraceScene;
 //
 // `camera`: the receivers of `model` (their emission image: what is seen directly);
 // `raysPerAxis` n in 1..16 (SettingsError otherwise); `triangles` follow gatherTriangles(scene),
-// as `trace` and `bvh` do.
+// as `trace` and `bvh` do (their meshIndex and localIndex are read; the vertices are trace's).
 Image renderLightmapImage(const CameraReceivers& camera, const TraceScene& trace, const Bvh& bvh,
                           const CameraModel& model, int raysPerAxis, const Scene& scene,
                           const SceneTriangles& triangles, const std::vector<ShippedLightmap>& lightmaps);

@@ -25,7 +25,9 @@ constexpr int kMaxStitchRounds = 8;
 constexpr int kStitchChannels = 6;
 
 // Vertices welded by position: equal within `eps` (a hash grid of eps cells, the 27 cells
-// around a point searched in a fixed order, so the ids do not depend on the hash's order).
+// around a point searched in a fixed order and each cell's points in the order they came, so
+// the ids do not depend on the hash's order). A cell holds its first and last point; each point
+// the next of its cell: a few words a vertex, which a mesh of millions of them needs.
 class PositionWeld {
 public:
     explicit PositionWeld(double eps) : eps_(eps) {}
@@ -36,16 +38,22 @@ public:
                 for (int dx = -1; dx <= 1; ++dx) {
                     const auto found = cells_.find(key({cell[0] + dx, cell[1] + dy, cell[2] + dz}));
                     if (found == cells_.end()) continue;
-                    for (uint32_t id : found->second)
+                    for (uint32_t id = found->second.first; id != kNone; id = next_[id])
                         if (glm::length(glm::dvec3(points_[id]) - glm::dvec3(p)) <= eps_) return id;
                 }
         const uint32_t id = static_cast<uint32_t>(points_.size());
         points_.push_back(p);
-        cells_[key(cell)].push_back(id);
+        next_.push_back(kNone);
+        const auto [slot, added] = cells_.try_emplace(key(cell), id, id);
+        if (!added) {
+            next_[slot->second.second] = id;
+            slot->second.second = id;
+        }
         return id;
     }
 
 private:
+    static constexpr uint32_t kNone = ~0u;
     std::array<int64_t, 3> cellOf(const vec3& p) const {
         return {static_cast<int64_t>(std::floor(p.x / eps_)), static_cast<int64_t>(std::floor(p.y / eps_)),
                 static_cast<int64_t>(std::floor(p.z / eps_))};
@@ -57,7 +65,8 @@ private:
     }
     double eps_;
     std::vector<vec3> points_;
-    std::unordered_map<uint64_t, std::vector<uint32_t>> cells_;
+    std::vector<uint32_t> next_;  // per point: the next point of its cell
+    std::unordered_map<uint64_t, std::pair<uint32_t, uint32_t>> cells_;  // a cell's first and last point
 };
 
 // A triangle's side on one 3D edge: the edge's ends (welded ids, lo < hi) and which corner
@@ -65,7 +74,7 @@ private:
 struct EdgeUse {
     uint32_t lo = 0, hi = 0;
     uint32_t mesh = 0, triangle = 0;
-    int cornerLo = 0, cornerHi = 0, cornerOther = 0;
+    uint8_t cornerLo = 0, cornerHi = 0, cornerOther = 0;
 };
 
 vec3 faceNormal(const Mesh& mesh, uint32_t t) {
@@ -151,11 +160,11 @@ std::vector<LightmapSeam> findLightmapSeams(const Scene& scene, const std::vecto
                 EdgeUse use;
                 use.mesh = m;
                 use.triangle = t;
-                use.cornerOther = (e + 2) % 3;
+                use.cornerOther = uint8_t((e + 2) % 3);
                 use.lo = std::min(a, b);
                 use.hi = std::max(a, b);
-                use.cornerLo = a < b ? i : j;
-                use.cornerHi = a < b ? j : i;
+                use.cornerLo = uint8_t(a < b ? i : j);
+                use.cornerHi = uint8_t(a < b ? j : i);
                 uses.push_back(use);
             }
         }

@@ -14,6 +14,7 @@ namespace vl {
 struct Scene;
 
 struct ReceiverScene {
+    // Each triangle's mesh and index in it; its vertices are traceScene's (vertices empty).
     SceneTriangles triangles;
     Bvh bvh;
     TraceScene traceScene;

@@ -14,6 +14,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <utility>
 
@@ -129,13 +130,91 @@ bool insideEdge(double e, Point2 a, Point2 b) { return e > 0.0 || (e == 0.0 && o
 struct Fragment {
     uint32_t texel;
     uint32_t mesh;
-    uint32_t localTriangle;
-    uint32_t globalTriangle;
+    uint32_t localTriangle;  // the global one: its mesh's offset plus this
     uint32_t count;
     double sumB1, sumB2;
 };
 
+// Two samples of a texel are one smooth surface when their normals lie within this cosine
+// (5°) and each lies in the other's plane within this slope: a tessellated curve's triangles,
+// not a crease.
+constexpr float kSmoothSurfaceCos = 0.9962f;
+constexpr float kSmoothSurfaceSlope = 0.05f;
+
 std::string quoted(const Scene& scene, uint32_t mesh) { return "'" + scene.meshes[mesh].name + "'"; }
+
+// Appends one texel's samples to `out`, those that continue one smooth surface (one mesh,
+// normals within kSmoothSurfaceCos of each other, each in the other's plane) as one: their
+// summed weight, weighted mean normal and albedo. A finely tessellated surface puts many
+// triangles in a texel, and one sample a triangle made the receivers' work and memory grow
+// with the triangles, not the texels; a crease, or a texel across two surfaces, keeps a sample
+// a side. The merged sample must lie on the surface: the mean of points on a curved surface
+// lies under it where it bulges, by more than a ray's offset, and rays from there meet the
+// surface's back (self-shadowed, or taken as buried). So where the members lie in one plane
+// it takes their mean position; where they bend, the position and triangle of the member
+// nearest that mean.
+void appendSmoothSamples(std::vector<SurfaceSample>& out, const std::vector<SurfaceSample>& samples,
+                         const std::vector<uint32_t>& meshes) {
+    const size_t first = out.size();
+    std::vector<uint32_t> groupOf(samples.size());
+    std::vector<uint32_t> groupMesh, groupLead;  // per group: its mesh, its first member
+    for (size_t k = 0; k < samples.size(); ++k) {
+        const SurfaceSample& s = samples[k];
+        size_t into = groupMesh.size();
+        for (size_t g = 0; g < groupMesh.size() && into == groupMesh.size(); ++g) {
+            const SurfaceSample& m = out[first + g];  // sums of its members until the texel is done
+            const vec3 n = glm::normalize(m.normal);
+            const vec3 d = s.position - m.position / m.weight;
+            const float apart = glm::length(d);
+            if (groupMesh[g] == meshes[k] && glm::dot(n, s.normal) >= kSmoothSurfaceCos &&
+                glm::abs(glm::dot(d, n)) <= kSmoothSurfaceSlope * apart &&
+                glm::abs(glm::dot(d, s.normal)) <= kSmoothSurfaceSlope * apart)
+                into = g;
+        }
+        groupOf[k] = uint32_t(into);
+        if (into == groupMesh.size()) {
+            SurfaceSample m = s;
+            m.position = s.weight * s.position;
+            m.normal = s.weight * s.normal;
+            m.albedo = s.weight * s.albedo;
+            out.push_back(m);
+            groupMesh.push_back(meshes[k]);
+            groupLead.push_back(uint32_t(k));
+            continue;
+        }
+        SurfaceSample& m = out[first + into];
+        m.position += s.weight * s.position;
+        m.normal += s.weight * s.normal;
+        m.albedo += s.weight * s.albedo;
+        m.weight += s.weight;
+    }
+    const size_t groups = groupMesh.size();
+    std::vector<vec3> mean(groups);
+    std::vector<float> nearest(groups, std::numeric_limits<float>::infinity());
+    std::vector<bool> flat(groups, true);
+    for (size_t g = 0; g < groups; ++g) mean[g] = out[first + g].position / out[first + g].weight;
+    for (size_t k = 0; k < samples.size(); ++k) {
+        const size_t g = groupOf[k];
+        const SurfaceSample& s = samples[k];
+        const SurfaceSample& lead = samples[groupLead[g]];
+        // One plane: the same normal, and the member in its plane to float rounding.
+        if (s.normal != lead.normal || glm::abs(glm::dot(s.position - lead.position, lead.normal)) >
+                                           1e-5f * (1.0f + glm::length(s.position - lead.position)))
+            flat[g] = false;
+        const float dist = glm::length(s.position - mean[g]);
+        if (dist < nearest[g]) {
+            nearest[g] = dist;
+            out[first + g].triangle = s.triangle;
+            out[first + g].position = s.position;  // taken as the position unless the group is flat
+        }
+    }
+    for (size_t g = 0; g < groups; ++g) {
+        SurfaceSample& m = out[first + g];
+        if (flat[g]) m.position = mean[g];
+        m.normal = glm::normalize(m.normal);
+        m.albedo /= m.weight;
+    }
+}
 
 LightmapAtlas rasterizeAtlas(const Scene& scene, const std::vector<uint32_t>& meshes,
                              const std::vector<uint32_t>& triangleOffsets, const LightmapSettings& settings,
@@ -175,11 +254,10 @@ LightmapAtlas rasterizeAtlas(const Scene& scene, const std::vector<uint32_t>& me
             const int y0 = std::max(0, static_cast<int>(std::floor(std::min({A.y, B.y, C.y}))));
             const int x1 = std::min(W - 1, static_cast<int>(std::floor(std::max({A.x, B.x, C.x}))));
             const int y1 = std::min(H - 1, static_cast<int>(std::floor(std::max({A.y, B.y, C.y}))));
-            const uint32_t global = triangleOffsets[m] + static_cast<uint32_t>(t);
             for (int y = y0; y <= y1; ++y)
                 for (int x = x0; x <= x1; ++x) {
                     const uint32_t texel = static_cast<uint32_t>(static_cast<size_t>(y) * W + x);
-                    Fragment f{texel, m, static_cast<uint32_t>(t), global, 0, 0.0, 0.0};
+                    Fragment f{texel, m, static_cast<uint32_t>(t), 0, 0.0, 0.0};
                     for (int j = 0; j < n; ++j)
                         for (int i = 0; i < n; ++i) {
                             const Point2 p{x + (i + 0.5) / n, y + (j + 0.5) / n};
@@ -203,7 +281,7 @@ LightmapAtlas rasterizeAtlas(const Scene& scene, const std::vector<uint32_t>& me
                                 f.sumB1 += w[1];
                                 f.sumB2 += w[2];
                             } else {
-                                fragments.push_back({texel, m, static_cast<uint32_t>(t), global, 1, w[1], w[2]});
+                                fragments.push_back({texel, m, static_cast<uint32_t>(t), 1, w[1], w[2]});
                             }
                         }
                     if (f.count > 0) fragments.push_back(f);
@@ -231,26 +309,58 @@ LightmapAtlas rasterizeAtlas(const Scene& scene, const std::vector<uint32_t>& me
     SurfaceSampleSet& set = atlas.receivers;
     set.width = W;
     set.height = H;
-    set.begin.assign(texels + 1, 0);
-    std::vector<uint32_t> probeTotal(texels, 0);
+    std::vector<uint32_t> fragmentBegin(texels + 1, 0), probeTotal(texels, 0);
     for (const Fragment& f : fragments) {
-        ++set.begin[f.texel + 1];
+        ++fragmentBegin[f.texel + 1];
         probeTotal[f.texel] += f.count;
     }
-    for (size_t i = 0; i < texels; ++i) set.begin[i + 1] += set.begin[i];
-    set.samples.resize(fragments.size());
-    std::vector<uint32_t> cursor(set.begin.begin(), set.begin.end() - 1);
-    for (const Fragment& f : fragments) {
-        const Mesh& mesh = scene.meshes[f.mesh];
-        const vec2 b(static_cast<float>(f.sumB1 / f.count), static_cast<float>(f.sumB2 / f.count));
-        const SurfacePoint point = interpolateSurface(mesh, f.localTriangle, b);
-        SurfaceSample s;
-        s.position = point.position;
-        s.normal = point.normal;
-        s.albedo = glm::clamp(vec3(baseColorAt(scene, mesh, f.localTriangle, b)), vec3(0.0f), vec3(1.0f));
-        s.triangle = f.globalTriangle;
-        s.weight = static_cast<float>(static_cast<double>(f.count) / probeTotal[f.texel]);
-        set.samples[cursor[f.texel]++] = s;
+    for (size_t i = 0; i < texels; ++i) fragmentBegin[i + 1] += fragmentBegin[i];
+    std::vector<uint32_t> order(fragments.size());
+    {
+        std::vector<uint32_t> cursor(fragmentBegin.begin(), fragmentBegin.end() - 1);
+        for (size_t k = 0; k < fragments.size(); ++k) order[cursor[fragments[k].texel]++] = uint32_t(k);
+    }
+    // Each texel's samples, built in fixed chunks of texels and joined in order: the same
+    // samples at any thread count, and no array of a sample per fragment.
+    constexpr size_t kChunkTexels = 4096;
+    const size_t chunks = (texels + kChunkTexels - 1) / kChunkTexels;
+    std::vector<std::vector<SurfaceSample>> chunkSamples(chunks);
+    std::vector<uint32_t> perTexel(texels, 0);
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+        std::vector<SurfaceSample> texelSamples;
+        std::vector<uint32_t> texelMeshes;
+        std::vector<SurfaceSample>& out = chunkSamples[c];
+        for (size_t texel = c * kChunkTexels; texel < std::min(texels, (c + 1) * kChunkTexels); ++texel) {
+            texelSamples.clear();
+            texelMeshes.clear();
+            for (uint32_t k = fragmentBegin[texel]; k < fragmentBegin[texel + 1]; ++k) {
+                const Fragment& f = fragments[order[k]];
+                const Mesh& mesh = scene.meshes[f.mesh];
+                const vec2 b(static_cast<float>(f.sumB1 / f.count), static_cast<float>(f.sumB2 / f.count));
+                const SurfacePoint point = interpolateSurface(mesh, f.localTriangle, b);
+                SurfaceSample s;
+                s.position = point.position;
+                s.normal = point.normal;
+                s.albedo = glm::clamp(vec3(baseColorAt(scene, mesh, f.localTriangle, b)), vec3(0.0f), vec3(1.0f));
+                s.triangle = triangleOffsets[f.mesh] + f.localTriangle;
+                s.weight = static_cast<float>(static_cast<double>(f.count) / probeTotal[f.texel]);
+                texelSamples.push_back(s);
+                texelMeshes.push_back(f.mesh);
+            }
+            const size_t before = out.size();
+            if (settings.samplePerTriangle) appendSmoothSamples(out, texelSamples, texelMeshes);
+            else out.insert(out.end(), texelSamples.begin(), texelSamples.end());
+            perTexel[texel] = uint32_t(out.size() - before);
+        }
+    });
+    std::vector<Fragment>().swap(fragments);
+    std::vector<uint32_t>().swap(order);
+    set.begin.assign(texels + 1, 0);
+    for (size_t i = 0; i < texels; ++i) set.begin[i + 1] = set.begin[i] + perTexel[i];
+    set.samples.reserve(set.begin[texels]);
+    for (std::vector<SurfaceSample>& chunk : chunkSamples) {
+        set.samples.insert(set.samples.end(), chunk.begin(), chunk.end());
+        std::vector<SurfaceSample>().swap(chunk);
     }
     atlas.mask = Image(W, H, 1, 0.0f);
     for (size_t i = 0; i < texels; ++i)

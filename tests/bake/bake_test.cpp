@@ -25,6 +25,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <set>
 #include <tuple>
 
@@ -561,6 +562,26 @@ TEST_CASE("Absurd settings are refused before any work", "[bake]") {
     settings.voxel.voxelSize = 2.0 / 1.5e6;
     CHECK_THROWS_WITH(bake(scene, settings, diagnostics), Catch::Contains("memory") || Catch::Contains("absurd") ||
                                                               Catch::Contains("pieces"));
+}
+
+TEST_CASE("A scene too big for the machine is refused before voxelizing, naming the file and its triangles", "[bake]") {
+    const Scene scene = twoRooms(0.1f);
+    BakeSettings settings = quietSettings();
+    settings.outputs.lightmaps = true;
+    // Without voxels the estimate is the triangles', the lightmaps' and the images' alone.
+    const double estimate = estimateBakeMemory(scene, settings, std::numeric_limits<double>::infinity());
+    REQUIRE(estimate > 300.0 * double(scene.triangleCount()));
+    CHECK_NOTHROW(checkSceneMemoryBudget(scene, settings, estimate * 1.01));
+    CHECK_THROWS_AS(checkSceneMemoryBudget(scene, settings, estimate * 0.99), SettingsError);
+    CHECK_THROWS_WITH(checkSceneMemoryBudget(scene, settings, estimate * 0.99),
+                      Catch::Contains(scene.sourcePath) &&
+                          Catch::Contains(std::to_string(scene.triangleCount()) + " triangles") &&
+                          Catch::Contains("lightmap-res"));
+    // Each triangle adds its share: twice the meshes, 300 bytes more per added triangle.
+    Scene doubled = scene;
+    doubled.meshes.insert(doubled.meshes.end(), scene.meshes.begin(), scene.meshes.end());
+    CHECK(estimateBakeMemory(doubled, settings, std::numeric_limits<double>::infinity()) - estimate ==
+          Approx(300.0 * double(scene.triangleCount())));
 }
 
 TEST_CASE("A failed bake leaves no output files and names the problem", "[bake]") {

@@ -101,20 +101,96 @@ TEST_CASE("Sub-texel probes on a shared edge belong to exactly one triangle", "[
             REQUIRE(iu < 3.01f);
         }
     }
-    // Merged per triangle: texels the diagonal crosses hold two samples whose weights add to 1.
+    // Merged: the quad's two triangles are one flat surface, so every texel, the diagonal's
+    // too, holds one sample of weight 1 at the centroid of its 16 probes, its centre.
     settings.samplePerTriangle = true;
     const LightmapAtlas merged = buildLightmapReceivers(scene, settings, diagnostics).at(0);
     for (size_t i = 0; i < 64; ++i) {
         const int x = static_cast<int>(i % 8), y = static_cast<int>(i / 8);
-        REQUIRE(merged.receivers.sampleCount(i) == (x == y ? 2u : 1u));
-        float sum = 0.0f;
-        for (uint32_t k = 0; k < merged.receivers.sampleCount(i); ++k) sum += merged.receivers.samples[merged.receivers.begin[i] + k].weight;
-        REQUIRE(sum == Approx(1.0f));
-        if (x != y) {  // the centroid of a fully covered texel's probes is its centre
-            const SurfaceSample& s = merged.receivers.samples[merged.receivers.begin[i]];
-            REQUIRE(glm::length(s.position - floorPoint((x + 0.5f) / 8.0f, (y + 0.5f) / 8.0f)) < 1e-5f);
-        }
+        REQUIRE(merged.receivers.sampleCount(i) == 1u);
+        const SurfaceSample& s = merged.receivers.samples[merged.receivers.begin[i]];
+        REQUIRE(s.weight == Approx(1.0f));
+        REQUIRE(glm::length(s.position - floorPoint((x + 0.5f) / 8.0f, (y + 0.5f) / 8.0f)) < 1e-5f);
+        REQUIRE(s.triangle < 2);
     }
+}
+
+TEST_CASE("A texel holds one sample per smooth surface however many triangles it covers", "[bake]") {
+    // The floor of floorScene, tessellated into 32 × 32 quads (2,048 triangles) on a 4 × 4
+    // atlas: 128 triangles a texel, all one flat surface.
+    Scene scene = floorScene();
+    Mesh& mesh = scene.meshes[0];
+    const int cells = 32;
+    mesh.positions.clear();
+    mesh.normals.clear();
+    mesh.uv1.clear();
+    mesh.indices.clear();
+    for (int j = 0; j <= cells; ++j)
+        for (int i = 0; i <= cells; ++i) {
+            const float u = float(i) / cells, v = float(j) / cells;
+            mesh.positions.push_back(floorPoint(u, v));
+            mesh.normals.push_back(vec3(0, 1, 0));
+            mesh.uv1.push_back(vec2(u, v));
+        }
+    for (int j = 0; j < cells; ++j)
+        for (int i = 0; i < cells; ++i) {
+            const uint32_t a = uint32_t(j * (cells + 1) + i), b = a + 1, c = a + cells + 1, d = c + 1;
+            mesh.indices.insert(mesh.indices.end(), {a, d, b, a, c, d});
+        }
+    LightmapSettings settings;
+    settings.width = settings.height = 4;
+    settings.subsamplesPerAxis = 8;
+    Diagnostics diagnostics(false, false);
+    const LightmapAtlas atlas = buildLightmapReceivers(scene, settings, diagnostics).at(0);
+    REQUIRE(atlas.coveredTexels == 16);
+    REQUIRE(atlas.receivers.samples.size() == 16);
+    for (size_t i = 0; i < 16; ++i) {
+        const int x = static_cast<int>(i % 4), y = static_cast<int>(i / 4);
+        REQUIRE(atlas.receivers.sampleCount(i) == 1u);
+        const SurfaceSample& s = atlas.receivers.samples[atlas.receivers.begin[i]];
+        REQUIRE(s.weight == Approx(1.0f));
+        REQUIRE(glm::length(s.position - floorPoint((x + 0.5f) / 4.0f, (y + 0.5f) / 4.0f)) < 1e-5f);
+        REQUIRE(s.normal == vec3(0, 1, 0));
+        // The triangle it names lies in the texel (the heaviest of them, all equal here).
+        const uint32_t quadIndex = s.triangle / 2;
+        const int qi = int(quadIndex % cells), qj = int(quadIndex / cells);
+        REQUIRE(qi / (cells / 4) == x);
+        REQUIRE(qj / (cells / 4) == y);
+    }
+}
+
+TEST_CASE("A texel across a crease keeps a sample on each side, weighted by its share", "[bake]") {
+    // A strip of 3 × 1 texels: flat for x < 0, rising 20° for x > 0; the crease at x = 0 runs
+    // through the middle texel's centre, so each side holds half its probes.
+    Scene scene = floorScene();
+    Mesh& mesh = scene.meshes[0];
+    const float rise = std::tan(glm::radians(20.0f));
+    const vec3 up(0, 1, 0), tilted = glm::normalize(vec3(-rise, 1, 0));
+    // The crease's vertices twice, one normal a side (a hard edge).
+    mesh.positions = {{-1.5f, 0, 0}, {0, 0, 0}, {0, 0, 1}, {-1.5f, 0, 1},
+                      {0, 0, 0},     {0, 0, 1}, {1.5f, 1.5f * rise, 0}, {1.5f, 1.5f * rise, 1}};
+    mesh.normals = {up, up, up, up, tilted, tilted, tilted, tilted};
+    mesh.uv1 = {{0, 0}, {0.5f, 0}, {0.5f, 1}, {0, 1}, {0.5f, 0}, {0.5f, 1}, {1, 0}, {1, 1}};
+    mesh.indices = {0, 2, 1, 0, 3, 2, 4, 7, 6, 4, 5, 7};
+    LightmapSettings settings;
+    settings.width = 3;
+    settings.height = 1;
+    settings.subsamplesPerAxis = 4;
+    Diagnostics diagnostics(false, false);
+    const LightmapAtlas atlas = buildLightmapReceivers(scene, settings, diagnostics).at(0);
+    REQUIRE(atlas.receivers.sampleCount(0) == 1u);
+    REQUIRE(atlas.receivers.sampleCount(2) == 1u);
+    REQUIRE(atlas.receivers.sampleCount(1) == 2u);
+    float sum = 0.0f;
+    for (uint32_t k = 0; k < 2; ++k) {
+        const SurfaceSample& s = atlas.receivers.samples[atlas.receivers.begin[1] + k];
+        REQUIRE(s.weight == Approx(0.5f));
+        // Each side's sample has its side's normal and lies on its side.
+        if (s.position.x < 0.0f) REQUIRE(glm::length(s.normal - up) < 1e-5f);
+        else REQUIRE(glm::length(s.normal - tilted) < 1e-5f);
+        sum += s.weight;
+    }
+    REQUIRE(sum == Approx(1.0f));
 }
 
 TEST_CASE("Shared atlas: emitters are skipped, a mesh without TEXCOORD_1 is named, overlaps are reported", "[bake]") {

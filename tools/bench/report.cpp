@@ -159,7 +159,7 @@ nlohmann::json nanToNull(double v) { return std::isfinite(v) ? nlohmann::json(v)
 nlohmann::json scalingRunJson(const StageScalingRun& run) {
     nlohmann::json stages = nlohmann::json::object();
     for (const StageTime& t : run.stages) stages[t.stage] = t.seconds;
-    return {{"label", run.label}, {"resolution", run.resolution}, {"lightmap_res", run.lightmapResolution},
+    return {{"label", run.label}, {"triangles", run.triangles}, {"resolution", run.resolution}, {"lightmap_res", run.lightmapResolution},
             {"threads", run.threads}, {"bakes", run.bakes}, {"ok", run.ok}, {"error", run.error}, {"voxels", run.voxels},
             {"gather_points", run.gatherPoints}, {"covered_texels", run.coveredTexels}, {"pixels", run.pixels},
             {"stage_seconds", stages}, {"total_seconds", run.totalSeconds()}, {"cpu_seconds", run.cpuSeconds}, {"other_cores", run.otherCores},
@@ -185,7 +185,8 @@ nlohmann::json scalingJson(const StageScaling& s) {
                             {"all_threads_seconds", t.allThreadsSeconds}, {"speedup", t.speedup}});
     for (const ScalingFinding& f : s.findings) findings.push_back({{"text", f.text}, {"flagged", f.flagged}});
     return {{"threads", s.threads}, {"runs", runs}, {"resolution_axis", labels(s.resolutionAxis)},
-            {"lightmap_axis", labels(s.lightmapAxis)},
+            {"lightmap_axis", labels(s.lightmapAxis)}, {"triangle_axis", labels(s.triangleAxis)},
+            {"texel_time_growth", s.texelTimeGrowth}, {"texel_time_growth_limit", kTexelTimeGrowthLimit},
             {"one_thread", s.oneThread ? scalingRunJson(*s.oneThread) : nlohmann::json(nullptr)},
             {"thread_speedup", speedups}, {"growth", growth}, {"findings", findings}, {"notes", s.notes},
             {"exponent_limit", kGrowthExponentLimit}, {"noise_floor_seconds", kScalingNoiseFloorSeconds}};
@@ -592,7 +593,12 @@ std::string scalingMarkdown(const StageScaling& s, const BenchOptions& options) 
        << fmt("%.0f", s.axes.repeatLimitSeconds)
        << " s); a stage's time is its fastest wall seconds (other load only adds time), CPU s that of the fastest "
           "bake, others the cores other processes used meanwhile (/proc/stat), peak MB the process's resident "
-          "high-water mark during the run.\n\n";
+          "high-water mark during the run.";
+    if (!s.triangleAxis.empty())
+        md << " The triangle axis bakes generated rooms of 64 spheres (`triangles=N` runs), every mesh with its own "
+              "TEXCOORD_1 cell, the same covered texels at every count, at resolution "
+           << s.axes.triangleResolution << " and lightmap " << s.axes.triangleLightmapResolution << "².";
+    md << "\n\n";
     md << "| run | voxels | gather points | covered texels | pixels |";
     for (const std::string& stage : stages) md << ' ' << stage << " |";
     md << " total | CPU s | others | peak MB |\n|---|---:|---:|---:|---:|";
@@ -614,7 +620,8 @@ std::string scalingMarkdown(const StageScaling& s, const BenchOptions& options) 
         md << "The base settings on 1 thread and on " << s.threads << " (other processes used "
            << fmt("%.1f", s.oneThread->otherCores) << " cores during the one, ";
         for (const StageScalingRun& run : s.runs)
-            if (run.resolution == s.oneThread->resolution && run.lightmapResolution == s.oneThread->lightmapResolution)
+            if (run.resolution == s.oneThread->resolution && run.lightmapResolution == s.oneThread->lightmapResolution &&
+                run.triangles == s.oneThread->triangles)
                 md << fmt("%.1f", run.otherCores);
         md << " during the other):\n\n";
         md << "| stage | 1 thread s | " << s.threads << " threads s | speedup |\n|---|---:|---:|---:|\n";

@@ -2,6 +2,7 @@
 
 #include "bench/format.h"
 #include "bench/process_stats.h"
+#include "bench/sphere_room.h"
 #include "core/diagnostics.h"
 
 #include <tbb/global_control.h>
@@ -11,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <set>
 
 namespace vl {
@@ -21,6 +23,9 @@ constexpr double kSameWorkRatio = 1.1;
 // A stage whose work an axis leaves alone but whose time still moves this much depends on
 // that axis: worth a line, though it has no exponent.
 constexpr double kNotableTimeRatio = 1.5;
+
+// Seconds with three decimals below 0.1 s, two above.
+std::string stageSecsText(double seconds) { return fmt(seconds < 0.1 ? "%.3f" : "%.2f", seconds); }
 
 std::string runLabel(int resolution, int lightmapResolution) {
     // 0: the voxel size the bake chooses from the scene (bake/voxel_size.h).
@@ -39,10 +44,13 @@ void keepFastest(std::vector<StageTime>& fastest, const std::vector<StageTime>& 
             if (t.stage == f.stage) f.seconds = std::min(f.seconds, t.seconds);
 }
 
-StageScalingRun bakeRun(const Scene& scene, const BakeJob& base, int resolution, int lightmapResolution, int threads,
-                        const StageScalingAxes& axes, bool quiet) {
+// `makeScene` gives the scene of each bake (a copy of the job's, or a generated one): the bake
+// takes it whole, so a run's peak memory is the bake's, not that of a scene kept beside it.
+StageScalingRun bakeRun(const std::function<Scene()>& makeScene, const BakeJob& base, int resolution,
+                        int lightmapResolution, int threads, const StageScalingAxes& axes, bool quiet,
+                        const std::string& label = "") {
     StageScalingRun run;
-    run.label = runLabel(resolution, lightmapResolution);
+    run.label = label.empty() ? runLabel(resolution, lightmapResolution) : label;
     run.resolution = resolution;
     run.lightmapResolution = lightmapResolution;
     run.threads = threads;
@@ -60,9 +68,11 @@ StageScalingRun bakeRun(const Scene& scene, const BakeJob& base, int resolution,
         double fastestTotal = 0.0;
         for (int r = 0; r < std::max(1, axes.repeats); ++r) {
             Diagnostics diagnostics(settings.strict, false);
+            Scene scene = makeScene();
+            run.triangles = scene.triangleCount();
             const double cpu = cpuSeconds(), busy = systemBusySeconds();
             const auto start = std::chrono::steady_clock::now();
-            const BakeResult result = bake(scene, settings, diagnostics);
+            const BakeResult result = bake(std::move(scene), settings, diagnostics);
             const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             const double cpuUsed = cpuSeconds() - cpu;
             const double others = wall > 0.0 ? std::max(0.0, systemBusySeconds() - busy - cpuUsed) / wall : 0.0;
@@ -128,7 +138,7 @@ void analyseAxis(StageScaling& s, const std::vector<size_t>& axis, const std::st
     for (size_t i : axis)
         if (s.runs[i].ok) ok.push_back(&s.runs[i]);
     const auto axisValue = [&](const StageScalingRun& r) {
-        return axisName == "resolution" ? r.resolution : r.lightmapResolution;
+        return std::to_string(axisName == "resolution" ? r.resolution : r.lightmapResolution);
     };
     for (const std::string& stage : stages) {
         const std::string work = stageWork(stage);
@@ -140,7 +150,7 @@ void analyseAxis(StageScaling& s, const std::vector<size_t>& axis, const std::st
                                             workOf(b, work));
             g.from = a.label;
             g.to = b.label;
-            const std::string step = axisName + " " + std::to_string(axisValue(a)) + " → " + std::to_string(axisValue(b));
+            const std::string step = axisName + " " + axisValue(a) + " → " + axisValue(b);
             const std::string where = ", " + step;
             const double timeRatio = g.seconds1 > 0.0 ? g.seconds2 / g.seconds1 : 0.0;
             const bool underNoise = g.seconds1 < kScalingNoiseFloorSeconds || g.seconds2 < kScalingNoiseFloorSeconds;
@@ -164,9 +174,47 @@ void analyseAxis(StageScaling& s, const std::vector<size_t>& axis, const std::st
         s.findings.push_back({"peak memory: " + fmt("%.0f", first.peakMemoryBytes / 1048576.0) + " → " +
                                   fmt("%.0f", last.peakMemoryBytes / 1048576.0) + " MB (" + fmt("%.2g×", memoryRatio) +
                                   " for " + fmt("%.2g×", workRatio) + " the " + work + "), " + axisName + " " +
-                                  std::to_string(axisValue(first)) + " → " + std::to_string(axisValue(last)),
+                                  axisValue(first) + " → " + axisValue(last),
                               false});
     }
+}
+
+// The triangle axis: each stage's time from the fewest triangles to the most, the lightmap's
+// time per covered texel against kTexelTimeGrowthLimit, peak memory against its goal.
+void analyseTriangleAxis(StageScaling& s, const std::vector<std::string>& stages) {
+    s.texelTimeGrowth = 0.0;
+    std::vector<const StageScalingRun*> ok;
+    for (size_t i : s.triangleAxis)
+        if (s.runs[i].ok) ok.push_back(&s.runs[i]);
+    if (ok.size() < 2) return;
+    const StageScalingRun &first = *ok.front(), &last = *ok.back();
+    const std::string span = "triangles " + std::to_string(first.triangles) + " → " + std::to_string(last.triangles);
+    const double triangleRatio = double(last.triangles) / double(std::max<size_t>(first.triangles, 1));
+    for (const std::string& stage : stages) {
+        if (!hasStage(first, stage) || !hasStage(last, stage)) continue;
+        const double t1 = first.stageSeconds(stage), t2 = last.stageSeconds(stage);
+        if (t1 < kScalingNoiseFloorSeconds || t2 < kScalingNoiseFloorSeconds) continue;
+        s.findings.push_back({stage + ": " + stageSecsText(t1) + " → " + stageSecsText(t2) + " s (" + fmt("%.2g×", t2 / t1) +
+                                  ") for " + fmt("%.3g×", triangleRatio) + " the triangles, " + span,
+                              false});
+    }
+    const auto perTexel = [](const StageScalingRun& r) {
+        return r.coveredTexels > 0 ? r.stageSeconds("lightmaps") / double(r.coveredTexels) : 0.0;
+    };
+    if (perTexel(first) > 0.0 && perTexel(last) > 0.0) {
+        s.texelTimeGrowth = perTexel(last) / perTexel(first);
+        const bool over = s.texelTimeGrowth > kTexelTimeGrowthLimit;
+        s.findings.push_back({"lightmap time per covered texel: " + fmt("%.2f", 1e6 * perTexel(first)) + " → " +
+                                  fmt("%.2f", 1e6 * perTexel(last)) + " µs (" + fmt("%.2f×", s.texelTimeGrowth) + ", goal ≤ " +
+                                  fmt("%g×", kTexelTimeGrowthLimit) + "), " + span,
+                              over});
+    }
+    const bool heavy = last.peakMemoryBytes > kTrianglePeakMemoryGoalBytes;
+    s.findings.push_back({"peak memory: " + fmt("%.0f", first.peakMemoryBytes / 1048576.0) + " → " +
+                              fmt("%.0f", last.peakMemoryBytes / 1048576.0) + " MB (goal under " +
+                              fmt("%.0f", kTrianglePeakMemoryGoalBytes / 1048576.0) + " MB at the most), " + span + " at " +
+                              std::to_string(last.lightmapResolution) + "²",
+                          heavy});
 }
 
 void analyseThreads(StageScaling& s, const std::vector<std::string>& stages) {
@@ -178,7 +226,9 @@ void analyseThreads(StageScaling& s, const std::vector<std::string>& stages) {
     const StageScalingRun& one = *s.oneThread;
     const StageScalingRun* all = nullptr;
     for (const StageScalingRun& r : s.runs)
-        if (r.ok && r.resolution == one.resolution && r.lightmapResolution == one.lightmapResolution) all = &r;
+        if (r.ok && r.resolution == one.resolution && r.lightmapResolution == one.lightmapResolution &&
+            r.triangles == one.triangles)
+            all = &r;
     if (!one.ok || !all) {
         s.notes.push_back("no thread speedup: the one-thread or the all-threads bake failed");
         return;
@@ -264,6 +314,7 @@ void analyseStageScaling(StageScaling& s) {
     std::vector<std::string> contended;  // steps, in the axes' order
     analyseAxis(s, s.resolutionAxis, "resolution", stages, underFloor, contended);
     analyseAxis(s, s.lightmapAxis, "lightmap-res", stages, underFloor, contended);
+    analyseTriangleAxis(s, stages);
     analyseThreads(s, stages);
     if (!underFloor.empty()) {
         std::string names;
@@ -290,6 +341,7 @@ StageScaling runStageScaling(const BakeJob& base, bool quiet, const StageScaling
     s.axes = axes;
     s.threads = tbb::info::default_concurrency();
     const Scene scene = loadJobScene(base);
+    const std::function<Scene()> copyOfJob = [&] { return scene; };
     const int baseResolution = base.settings.voxel.resolution;
     const int baseLightmap = base.settings.lightmap.width;
 
@@ -302,7 +354,7 @@ StageScaling runStageScaling(const BakeJob& base, bool quiet, const StageScaling
     auto runIndex = [&](int resolution, int lightmap) {
         for (size_t i = 0; i < s.runs.size(); ++i)
             if (s.runs[i].resolution == resolution && s.runs[i].lightmapResolution == lightmap) return i;
-        s.runs.push_back(bakeRun(scene, base, resolution, lightmap, s.threads, axes, quiet));
+        s.runs.push_back(bakeRun(copyOfJob, base, resolution, lightmap, s.threads, axes, quiet));
         return s.runs.size() - 1;
     };
     for (int r : sortedUnique(axes.resolutions)) s.resolutionAxis.push_back(runIndex(r, baseLightmap));
@@ -311,7 +363,17 @@ StageScaling runStageScaling(const BakeJob& base, bool quiet, const StageScaling
         // The all-threads bake the one-thread one is compared with (an extra run when the
         // job's own values are on neither axis).
         runIndex(baseResolution, baseLightmap);
-        s.oneThread = bakeRun(scene, base, baseResolution, baseLightmap, 1, axes, quiet);
+        s.oneThread = bakeRun(copyOfJob, base, baseResolution, baseLightmap, 1, axes, quiet);
+    }
+    std::vector<size_t> triangles = axes.triangles;
+    std::sort(triangles.begin(), triangles.end());
+    triangles.erase(std::unique(triangles.begin(), triangles.end()), triangles.end());
+    for (size_t t : triangles) {
+        const std::string label = "triangles=" + std::to_string(sphereRoom(t).triangleCount()) + " " +
+                                  runLabel(axes.triangleResolution, axes.triangleLightmapResolution);
+        s.runs.push_back(bakeRun([t] { return sphereRoom(t); }, base, axes.triangleResolution,
+                                 axes.triangleLightmapResolution, s.threads, axes, quiet, label));
+        s.triangleAxis.push_back(s.runs.size() - 1);
     }
     analyseStageScaling(s);
     if (base.settings.voxel.voxelSize > 0.0)

@@ -1,7 +1,9 @@
 // How the bake's stages scale (voxlight bench's "How the stages scale"). Takes a bake job;
 // loads its scene once and bakes it in memory (bake.h, no files) along two axes: voxel
 // resolution at the job's lightmap size, and lightmap resolution at the job's voxel
-// resolution (the job's own settings are one run of both). Gives every run's per-stage wall
+// resolution (the job's own settings are one run of both); and, when asked, a third: generated
+// rooms of spheres of more and more triangles at one voxel and lightmap resolution
+// (bench/sphere_room.h), the same covered texels in each. Gives every run's per-stage wall
 // time, work (voxels, gather points, covered texels, pixels) and peak memory; each stage's
 // growth exponent against its work between consecutive runs, flagged above
 // kGrowthExponentLimit; and the speedup of the job's bake from one thread to all of them.
@@ -24,6 +26,11 @@ constexpr double kScalingNoiseFloorSeconds = 0.005;
 // Parallel efficiency expected of the stages that carry the bake (bounces, gather): the
 // issue's 1 → 2 threads ≥ 1.8×.
 constexpr double kThreadEfficiencyTarget = 0.9;
+// The triangle axis's goals (issue 35): the lightmap's time per covered texel grows by no more
+// than this from the fewest triangles to the most, and the most triangles bake in under
+// kTrianglePeakMemoryGoalBytes.
+constexpr double kTexelTimeGrowthLimit = 2.0;
+constexpr double kTrianglePeakMemoryGoalBytes = 2.0 * 1024.0 * 1024.0 * 1024.0;
 // Other processes using more than this many cores during a run take cores its threads need:
 // its times carry their load, and a thread speedup measured then is not rated.
 constexpr double kOtherLoadLimitCores = 0.25;
@@ -32,6 +39,12 @@ struct StageScalingAxes {
     std::vector<int> resolutions = {64, 128, 256};              // voxels along the longest axis
     std::vector<int> lightmapResolutions = {256, 512, 1024};    // atlas width and height
     bool threads = true;  // also bake the job's settings on one thread
+    // The triangle axis: a sphere room of each of these many triangles (none: no axis), baked
+    // at triangleResolution voxels and a triangleLightmapResolution² atlas, the job's other
+    // settings.
+    std::vector<size_t> triangles;
+    int triangleResolution = 128;
+    int triangleLightmapResolution = 2048;
     // Bakes per run; a stage's time is its fastest: the ratios of small stage times are what
     // is measured, and other load on the machine only ever adds time.
     int repeats = 3;
@@ -40,6 +53,7 @@ struct StageScalingAxes {
 
 struct StageScalingRun {
     std::string label;  // "resolution=64 lightmap-res=256"
+    size_t triangles = 0;  // of the scene baked
     int resolution = 0;
     int lightmapResolution = 0;
     int threads = 0;  // TBB's parallelism during the run
@@ -101,9 +115,12 @@ struct StageScaling {
     std::vector<StageScalingRun> runs;        // resolution axis ascending, then the lightmap axis's other runs
     std::vector<size_t> resolutionAxis;       // indices into runs, by resolution
     std::vector<size_t> lightmapAxis;         // by lightmap resolution
+    std::vector<size_t> triangleAxis;         // by triangles (the generated scenes)
     std::optional<StageScalingRun> oneThread; // the job's settings on one thread
     std::vector<ThreadSpeedup> speedups;      // in stage order, then "total"
     std::vector<StageGrowth> growth;          // resolution axis, then lightmap axis; stages in bake order
+    // The triangle axis's lightmap time per covered texel, fewest triangles to most (0: no axis).
+    double texelTimeGrowth = 0.0;
     std::vector<ScalingFinding> findings;     // growth lines, flags, thread speedups
     std::vector<std::string> notes;           // what was not rated and why
 };

@@ -42,6 +42,7 @@ struct BenchCliOptions {
     bool quiet = false;
     bool scaling = false;    // --scaling: even when --methods leaves out vct
     bool noScaling = false;
+    std::vector<size_t> scalingTriangles;  // --scaling-triangles: the triangle axis (empty: none)
     std::vector<std::string> methods;  // empty = all
     std::string commandLine;
 };
@@ -115,7 +116,8 @@ BenchOptions plan(const BenchCliOptions& o) {
     options.cyclesSpp = o.cyclesSpp;
     // The stage scaling is about the VCT bake: on unless the run leaves the bake out.
     const bool vctWanted = o.methods.empty() || std::find(o.methods.begin(), o.methods.end(), "vct") != o.methods.end();
-    options.scaling = o.scaling || (!o.noScaling && vctWanted);
+    options.scaling = o.scaling || (!o.noScaling && vctWanted) || !o.scalingTriangles.empty();
+    options.scalingAxes.triangles = o.scalingTriangles;
     options.plot = !o.noPlot;
     options.quiet = o.quiet;
     options.commandLine = o.commandLine;
@@ -218,7 +220,13 @@ void addBenchCommand(CLI::App& app) {
                                   "time every stage against voxel resolution 64/128/256, lightmap resolution "
                                   "256/512/1024 and 1 thread against all, each the fastest of 3 bakes (default: on unless --methods "
                                   "leaves out vct)");
-    cmd->add_flag("--no-scaling", o->noScaling, "leave out the stage scaling")->excludes(scaling);
+    auto* noScaling = cmd->add_flag("--no-scaling", o->noScaling, "leave out the stage scaling")->excludes(scaling);
+    cmd->add_option("--scaling-triangles", o->scalingTriangles,
+                    "add the stage scaling's triangle axis: a generated room of 64 spheres of about each of these many "
+                    "triangles (e.g. 30000 300000 3000000), baked at resolution 128 and lightmap 2048², the same covered "
+                    "texels at every count")
+        ->check(CLI::Range(size_t(100), size_t(100000000)))
+        ->excludes(noScaling);
     cmd->add_flag("--no-plot", o->noPlot, "write the gnuplot script and data but do not run gnuplot");
     cmd->add_flag("-q,--quiet", o->quiet, "no progress or table output");
     for (const auto& spec : bakeSettingsTable()) {

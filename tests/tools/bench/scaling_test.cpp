@@ -2,6 +2,9 @@
 // of hand-made runs (growth, thread speedups, what is not rated), and a small real run on the
 // Cornell box whose voxels, texels and stages must follow its axes.
 #include "bench/scaling.h"
+#include "bench/sphere_room.h"
+#include "core/diagnostics.h"
+#include "receivers/receivers.h"
 #include "support/paths.h"
 #include "tiny_job.h"
 
@@ -207,4 +210,62 @@ TEST_CASE("Stage scaling compares one thread with the job's own settings even wh
     REQUIRE_FALSE(s.speedups.empty());
     CHECK(s.speedups.back().stage == "total");
     for (const std::string& note : s.notes) CHECK(note.find("failed") == std::string::npos);
+}
+
+TEST_CASE("The triangle axis rates the lightmap's time per covered texel and the peak memory against the goals", "[bench]") {
+    StageScaling s;
+    s.threads = 2;
+    StageScalingRun few = handRun(128, 8000, {{"bvh", 0.01}, {"lightmaps", 1.0}});
+    few.triangles = 30000;
+    few.lightmapResolution = 2048;
+    few.peakMemoryBytes = 1.0e9;
+    StageScalingRun many = handRun(128, 8000, {{"bvh", 4.0}, {"lightmaps", 2.5}});
+    many.triangles = 3000000;
+    many.lightmapResolution = 2048;
+    many.coveredTexels = few.coveredTexels;
+    many.peakMemoryBytes = 2.5 * 1024.0 * 1024.0 * 1024.0;
+    s.runs = {few, many};
+    s.triangleAxis = {0, 1};
+    analyseStageScaling(s);
+    CHECK(s.texelTimeGrowth == Approx(2.5));
+    CHECK(countFlagged(s, "lightmap time per covered texel") == 1);
+    CHECK(countFlagged(s, "peak memory") == 1);
+
+    // Within both goals: 1.8× per texel, 1.5 GiB.
+    s.runs[1].stages = {{"bvh", 4.0}, {"lightmaps", 1.8}};
+    s.runs[1].peakMemoryBytes = 1.5 * 1024.0 * 1024.0 * 1024.0;
+    analyseStageScaling(s);
+    CHECK(s.texelTimeGrowth == Approx(1.8));
+    CHECK(countFlagged(s, "lightmap time per covered texel") == 0);
+    CHECK(countFlagged(s, "peak memory") == 0);
+    // Twice the covered texels in the same time is half the time per texel.
+    s.runs[1].coveredTexels = 2 * few.coveredTexels;
+    analyseStageScaling(s);
+    CHECK(s.texelTimeGrowth == Approx(0.9));
+    // A failed run leaves one: no per-texel growth.
+    s.runs[1].ok = false;
+    analyseStageScaling(s);
+    CHECK(s.texelTimeGrowth == 0.0);
+}
+
+TEST_CASE("The sphere room holds the triangles asked for and the same lightmap cells at any count", "[bench]") {
+    LightmapSettings settings;
+    settings.width = settings.height = 256;
+    settings.subsamplesPerAxis = 2;
+    std::vector<size_t> covered;
+    for (size_t triangles : {size_t(30000), size_t(300000)}) {
+        const Scene scene = sphereRoom(triangles);
+        INFO(triangles);
+        CHECK(double(scene.triangleCount()) == Approx(double(triangles)).epsilon(0.001));
+        CHECK(scene.lights.size() == 1);
+        CHECK(scene.cameras.size() == 1);
+        Diagnostics diagnostics(false, false);
+        const auto atlases = buildLightmapReceivers(scene, settings, diagnostics);
+        REQUIRE(atlases.size() == 1);
+        CHECK(atlases[0].overlappingProbes == 0);  // every mesh in a cell of its own
+        covered.push_back(atlases[0].coveredTexels);
+    }
+    // The spheres' charts are their cells' rectangles, less the poles' half rows: finer rings
+    // lose less, so the counts agree within the coarser sphere's pole rows.
+    CHECK(double(covered[1]) == Approx(double(covered[0])).epsilon(0.05));
 }
