@@ -79,6 +79,11 @@ void checkLightAttenuationNames(const Scene& scene, const LightingSettings& ligh
 
 }  // namespace
 
+void resolveLightBake(Scene& scene, LightBake setting) {
+    for (Light& light : scene.lights)
+        if (light.bake == LightBake::Unset) light.bake = setting;
+}
+
 double estimateBakeMemory(const Scene& scene, const BakeSettings& settings, double voxelSize) {
     // A voxel costs ~100 bytes of channels, as much again in voxelization fragments, and ~50
     // in mips. A receiver sample costs ~48 bytes, a texel or pixel ~64 per image kept. A
@@ -195,6 +200,7 @@ GeneratedUvs generateSharedAtlasUvs(Scene& scene, const BakeSettings& settings, 
 
 VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnostics& diagnostics) {
     validateBakeSettings(settings);
+    resolveLightBake(scene, settings.lightBake);
     VoxelStages stages;
     BakeResult& result = stages.result;
     // Into its own frame before anything is sized: a resolution, the free paths' count and

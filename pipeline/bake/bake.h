@@ -148,6 +148,9 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
 // voxel size counts no voxels.
 double estimateBakeMemory(const Scene& scene, const BakeSettings& settings, double voxelSize);
 
+// Gives every light without a bake mode of its own (LightBake::Unset) the setting's.
+void resolveLightBake(Scene& scene, LightBake setting);
+
 // Refuses, before any work, a bake whose estimated memory exceeds what the machine has
 // available (SettingsError with both figures).
 void checkMemoryBudget(const Scene& scene, const BakeSettings& settings, double voxelSize);

@@ -290,7 +290,7 @@ void writeBakeFiles(const BakeJob& job, BakeResult& result, const ExportSource& 
             for (const BakedLightmap& lightmap : result.lightmaps)
                 lightmaps.push_back({lightmap.name, lightmap.meshes, encodeRgbm(lightmap.total)});
             writeLightmappedGlb(source.sourcePath, source.meshSources, result.generatedLayouts, lightmaps,
-                                job.addedCameras, p, diagnostics, source.viewerSky);
+                                job.addedCameras, p, diagnostics, source.viewerSky, job.addedLights, settings.lightBake);
         });
     files.writeAll();
     report.stages.push_back({"write", std::chrono::duration<double>(std::chrono::steady_clock::now() - writeStart).count()});
@@ -372,6 +372,7 @@ Scene loadJobScene(const BakeJob& job) {
             material.transmission = 0.0f;
         }
     addJobLightsAndCameras(job, scene);
+    resolveLightBake(scene, job.settings.lightBake);
     return scene;
 }
 

@@ -65,6 +65,9 @@ struct BakeSettings {
     // for the references the bench and `voxlight reference` trace: the transport alone, without
     // the light a diffuse lightmap cannot hold (a mirror's image, a glass's refraction).
     bool lambertMaterials = false;
+    // The bake mode of every punctual light that does not give its own (scene.h LightBake):
+    // All bakes its direct light too; Indirect leaves that to the engine.
+    LightBake lightBake = LightBake::All;
     bool strict = false;  // every warning is an error
     bool filesOutsideScene = false;  // read uris that leave the scene's folder (LoadOptions)
     bool quiet = false;   // no progress on stderr

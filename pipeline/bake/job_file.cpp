@@ -51,7 +51,8 @@ const LightKey kLightKeyTypes[] = {{"name", nullptr},
                                    {"direction", "spot and directional"},
                                    {"angle", "directional"},
                                    {"innerConeAngle", "spot"},
-                                   {"outerConeAngle", "spot"}};
+                                   {"outerConeAngle", "spot"},
+                                   {"bake", nullptr}};
 const std::vector<std::string> kLightKeys = [] {
     std::vector<std::string> keys;
     for (const LightKey& key : kLightKeyTypes) keys.push_back(key.name);
@@ -230,6 +231,12 @@ Light readLight(const json& object, const std::string& where) {
         if (!(degrees >= 0.0f && degrees <= 90.0f))
             throw InputError(where + ".angle: " + std::to_string(degrees) + " is outside 0..90 degrees");
         light.angularDiameter = degrees * kPi / 180.0f;
+    }
+    if (object.contains("bake")) {
+        const nlohmann::json& mode = object["bake"];
+        if (!mode.is_string() || (mode != "all" && mode != "indirect"))
+            throw InputError(where + ".bake: " + mode.dump() + " is not \"all\" or \"indirect\"");
+        light.bake = mode == "all" ? LightBake::All : LightBake::Indirect;
     }
     if (light.type == LightType::Spot) {
         light.innerConeAngle = object.value("innerConeAngle", 0.0f);

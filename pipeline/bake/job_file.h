@@ -31,7 +31,8 @@ namespace vl {
 // }
 //
 // Every key of every object is one of those above (a light also takes "direction", "range",
-// "angle", "innerConeAngle", "outerConeAngle", each for the types it belongs to; "settings"
+// "angle", "innerConeAngle", "outerConeAngle", each for the types it belongs to, and "bake":
+// "all" or "indirect", its bake mode, scene.h LightBake; "settings"
 // takes the bake settings): another is refused, naming the file, the place and the closest
 // known key. A scene bakes into <output>/<name> (name: its file's stem by default) or into its
 // "output", a relative path inside the job's output folder; a name is one folder's name (no

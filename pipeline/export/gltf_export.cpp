@@ -345,12 +345,61 @@ void addCameras(tinygltf::Model& model, const std::vector<Camera>& cameras) {
     }
 }
 
+constexpr const char* kLightBakeExtension = "VOXLIGHT_light_bake";
+// glTF's punctual intensities are photometric: the loader's ÷ 683 undone (scene/gltf_loader.cpp).
+constexpr double kLumensPerWatt = 683.0;
+
+tinygltf::Value lightBakeExtension(LightBake mode) {
+    tinygltf::Value::Object object;
+    object["mode"] = tinygltf::Value(std::string(mode == LightBake::Indirect ? "indirect" : "all"));
+    return tinygltf::Value(object);
+}
+
+// A glTF light's direction is its node's −Z.
+void addLightBakes(tinygltf::Model& model, const std::vector<Light>& addedLights, LightBake setting) {
+    for (tinygltf::Light& light : model.lights)
+        if (!light.extensions.count(kLightBakeExtension)) light.extensions[kLightBakeExtension] = lightBakeExtension(setting);
+    for (const Light& light : addedLights) {
+        const LightBake mode = light.bake == LightBake::Unset ? setting : light.bake;
+        if (mode != LightBake::Indirect) continue;
+        tinygltf::Light written;
+        written.name = light.name;
+        written.type = light.type == LightType::Point ? "point" : light.type == LightType::Spot ? "spot" : "directional";
+        written.color = {light.color.x, light.color.y, light.color.z};
+        written.intensity = double(light.intensity) * kLumensPerWatt;
+        if (light.type != LightType::Directional) written.range = light.range;
+        if (light.type == LightType::Spot) {
+            written.spot.innerConeAngle = light.innerConeAngle;
+            written.spot.outerConeAngle = light.outerConeAngle;
+        }
+        written.extensions[kLightBakeExtension] = lightBakeExtension(mode);
+        model.lights.push_back(written);
+        if (model.scenes.empty()) model.scenes.emplace_back();
+        tinygltf::Node node;
+        node.name = light.name;
+        tinygltf::Value::Object reference;
+        reference["light"] = tinygltf::Value(int(model.lights.size() - 1));
+        node.extensions["KHR_lights_punctual"] = tinygltf::Value(reference);
+        const vec3 back = -glm::normalize(light.direction);  // the node's +Z
+        const vec3 helper = std::abs(back.y) < 0.9f ? vec3(0, 1, 0) : vec3(1, 0, 0);
+        const vec3 right = glm::normalize(glm::cross(helper, back));
+        const glm::quat rotation = glm::quat_cast(glm::mat3(right, glm::cross(back, right), back));
+        node.rotation = {rotation.x, rotation.y, rotation.z, rotation.w};
+        if (light.type != LightType::Directional) node.translation = {light.position.x, light.position.y, light.position.z};
+        model.nodes.push_back(node);
+        model.scenes[size_t(std::max(model.defaultScene, 0))].nodes.push_back(int(model.nodes.size() - 1));
+    }
+    if (!model.lights.empty() &&
+        std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), kLightBakeExtension) == model.extensionsUsed.end())
+        model.extensionsUsed.push_back(kLightBakeExtension);
+}
+
 }  // namespace
 
 void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Source>& meshes,
                          const std::vector<GeneratedLayout>& layouts, const std::vector<ExportedLightmap>& lightmaps,
                          const std::vector<Camera>& addedCameras, const std::string& path, Diagnostics& diagnostics,
-                         const vec3& sky) {
+                         const vec3& sky, const std::vector<Light>& addedLights, LightBake lightBake) {
     if (!layouts.empty() && layouts.size() != meshes.size())
         throw Error("writeLightmappedGlb: " + std::to_string(layouts.size()) + " layouts for " +
                     std::to_string(meshes.size()) + " meshes");
@@ -366,6 +415,7 @@ void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Sour
                     lightmaps);
 
     addCameras(model, addedCameras);
+    addLightBakes(model, addedLights, lightBake);
     giveFarPlanes(model);
 
     if (maxComponent(sky) > 0.0f && !model.scenes.empty()) {

@@ -47,9 +47,14 @@ struct ExportedLightmap {
 // viewer can show the bake's images' views. A `sky` (scene.h Sky::meanRadiance; zero: none), which glTF
 // cannot hold, goes into the scene's extras as {"voxlight": {"sky": [r, g, b]}} (radiance,
 // W/(m²·sr)): what `voxlight view` draws where nothing is.
+// Every KHR_lights_punctual light says what the lightmaps hold of it, in the light's
+// VOXLIGHT_light_bake extension {"mode": "all" | "indirect"} (docs/light-bake-modes.md): its
+// own mode as the file gave it, else `lightBake`. `addedLights` (a job file's, in world space)
+// whose mode is indirect become lights at the scene's root: the engine must draw them.
 void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Source>& meshes,
                          const std::vector<GeneratedLayout>& layouts, const std::vector<ExportedLightmap>& lightmaps,
                          const std::vector<Camera>& addedCameras, const std::string& path, Diagnostics& diagnostics,
-                         const vec3& sky = vec3(0.0f));
+                         const vec3& sky = vec3(0.0f), const std::vector<Light>& addedLights = {},
+                         LightBake lightBake = LightBake::All);
 
 }  // namespace vl

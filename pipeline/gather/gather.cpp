@@ -190,10 +190,13 @@ ReceiverLighting ReceiverGather::atlasRows(const LightmapAtlas& given, int rowBe
     Progress progress("lightmap " + atlas.name, last - first, quiet_);
     const TraceSceneView scene = tracing_.traceScene.view();
     const BvhView bvh = tracing_.bvh.view();
+    // A lightmap leaves out the direct light of the lights an engine draws (LightBake::Indirect).
+    DirectLightSettings baked = direct_;
+    baked.engineDrawnLights = false;
     ReceiverLighting lit;
     if (device_) {
         // The device lights whole atlases; rows outside the band are cleared.
-        lit = device_->shadeReceivers(receivers, scene, bvh, &mipView_, gathered_, settings_.cone, direct_, true);
+        lit = device_->shadeReceivers(receivers, scene, bvh, &mipView_, gathered_, settings_.cone, baked, true);
         for (Image* image : {&lit.direct, &lit.indirect, &lit.directRadiance, &lit.indirectRadiance})
             for (size_t k = 0; k < image->pixels.size(); ++k) {
                 const size_t element = k / 3;
@@ -206,7 +209,7 @@ ReceiverLighting ReceiverGather::atlasRows(const LightmapAtlas& given, int rowBe
         // records (texel_gather.h). An image sky's sun casts shadows as sharp as a light's,
         // which the records' lattice and filter would blur: it stays per sample.
         const bool skyInRecords = !scene.sky.hasImage();
-        DirectLightSettings direct = direct_;
+        DirectLightSettings direct = baked;
         direct.skyAtSamples = !skyInRecords;
         lit = shadeReceivers(receivers, scene, bvh, nullptr, nullptr, settings_.cone, direct, true, &progress, first, last);
         progress.finish();
@@ -218,7 +221,7 @@ ReceiverLighting ReceiverGather::atlasRows(const LightmapAtlas& given, int rowBe
         texels.skyDrawsPerAxis = direct_.skyStrata;
         texels.filterPasses = settings_.lightmapFilterPasses;
         texels.gradients = settings_.lightmapGradients;
-        texels.direct = direct;
+        texels.direct = direct_;  // every light: what tells a record is open
         texels.direct.skyAtSamples = false;
         texels.gatherSky = skyInRecords;
         const BrightPatchSplit& bright = light_.bright;
@@ -233,7 +236,7 @@ ReceiverLighting ReceiverGather::atlasRows(const LightmapAtlas& given, int rowBe
         lit.open = gathered.open;
         return lit;  // a lightmap's reflected light (directRadiance, indirectRadiance) is not read
     } else {
-        lit = shadeReceivers(receivers, scene, bvh, &mipView_, gathered_, settings_.cone, direct_, true, &progress, first,
+        lit = shadeReceivers(receivers, scene, bvh, &mipView_, gathered_, settings_.cone, baked, true, &progress, first,
                              last);
     }
     progress.finish();

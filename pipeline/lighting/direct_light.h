@@ -35,6 +35,9 @@ struct DirectLightSettings {
     // (trace/light_tree.h): the nearer and brighter lights alone and exact, the rest sampled.
     // docs/many-lights.md.
     int lightCut = 64;
+    // false: the lights an engine draws itself (TraceLight::engineDrawn) are left out, for a
+    // lightmap that holds their indirect light alone.
+    bool engineDrawnLights = true;
 };
 
 // cos θ_r · cos θ_e / d² between a receiver (p; geometric normal ng, shading normal ns) and
@@ -338,10 +341,12 @@ VL_HOSTDEV inline vec3 patchAreaSample(const TraceSceneView& s, const BvhView& b
 }
 
 // The point and spot lights of a tree at a receiver, unbiased (light_tree.h); one shadow ray
-// per node of the cut. Zero without a tree.
+// per node of the cut; engineDrawn false leaves out the lights an engine draws. Zero without a tree.
 VL_HOSTDEV inline vec3 treePointLightsIrradiance(const TraceSceneView& s, const BvhView& bvh, const vec3& p,
-                                                 const vec3& ng, const vec3& ns, int budget, uint64_t seed) {
+                                                 const vec3& ng, const vec3& ns, int budget, uint64_t seed,
+                                                 bool engineDrawn = true) {
     return estimateLightTree(s.pointLightTree, p, ns, budget, seed, [&](uint32_t light, int, bool) {
+        if (!engineDrawn && s.lights[light].engineDrawn) return vec3(0.0f);
         return punctualLightIrradiance(bvh, s.lights[light], p, ng, ns, vec2(0.0f));
     });
 }
@@ -372,12 +377,14 @@ VL_HOSTDEV inline vec3 directIrradiance(const TraceSceneView& s, const BvhView& 
     const bool pointTree = s.pointLightTree.nodes != nullptr;
     for (uint32_t i = 0; i < s.lightCount; ++i) {
         const TraceLight& light = s.lights[i];
+        if (!settings.engineDrawnLights && light.engineDrawn) continue;
         if (light.type == TraceLightType::Directional && light.cosHalfAngle < 1.0f)
             e += sunIrradiance(bvh, light, r.position, ng, r.normal, settings.emitterStrata, seed, i);
         else if (light.type == TraceLightType::Directional || !pointTree)
             e += punctualLightIrradiance(bvh, light, r.position, ng, r.normal, vec2(0.0f));
     }
-    if (pointTree) e += treePointLightsIrradiance(s, bvh, r.position, ng, r.normal, settings.lightCut, seed);
+    if (pointTree)
+        e += treePointLightsIrradiance(s, bvh, r.position, ng, r.normal, settings.lightCut, seed, settings.engineDrawnLights);
     if (settings.skyAtSamples) e += skyIrradiance(s, bvh, r.position, ng, r.normal, settings.skyStrata, seed);
     const auto patch = [&](uint32_t k) {
         const int8_t quad = s.emitterQuad ? s.emitterQuad[k] : kQuadSingle;

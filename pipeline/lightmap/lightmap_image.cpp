@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "export/lightmap_encoding.h"
+#include "lighting/direct_light.h"
 #include "trace/bvh_traverse.h"
 #include "trace/trace_scene.h"
 
@@ -73,6 +74,10 @@ Image renderLightmapImage(const CameraReceivers& camera, const TraceScene& trace
 
     const TraceSceneView view = trace.view();
     const BvhView bvhView = bvh.view();
+    std::vector<uint32_t> engineDrawn;  // lights the lightmaps left out: drawn here per read
+    for (uint32_t l = 0; l < view.lightCount; ++l)
+        if (view.lights[l].engineDrawn) engineDrawn.push_back(l);
+    const int strata = DirectLightSettings{}.emitterStrata;
     const int n = raysPerAxis;
     const float weight = 1.0f / float(n * n);
     Image out = camera.emission;
@@ -93,6 +98,23 @@ Image renderLightmapImage(const CameraReceivers& camera, const TraceScene& trace
                             const vec2 uv = lightmapUvAt(scene.meshes[m], triangles.localIndex[hit.triangle],
                                                          view.vertices + 3 * size_t(hit.triangle), h.position);
                             light = sampleLightmap(lightmaps[size_t(lightmapOf[m])].texels, uv);
+                        }
+                        if (!engineDrawn.empty()) {
+                            // The side the camera sees; the read's own seed, so any thread count
+                            // gives the same bytes.
+                            const bool front = glm::dot(h.geometricNormal, ray.direction) < 0.0f;
+                            const vec3 ng = front ? h.geometricNormal : -h.geometricNormal;
+                            const vec3 ns = front ? h.shadingNormal : -h.shadingNormal;
+                            const uint64_t seed = (uint64_t(y) * uint64_t(model.width) + uint64_t(x)) * uint64_t(n * n) +
+                                                  uint64_t(j * n + i);
+                            vec3 e(0.0f);
+                            for (uint32_t l : engineDrawn) {
+                                const TraceLight& drawn = view.lights[l];
+                                e += drawn.type == TraceLightType::Directional && drawn.cosHalfAngle < 1.0f
+                                         ? sunIrradiance(bvhView, drawn, h.position, ng, ns, strata, seed, l)
+                                         : punctualLightIrradiance(bvhView, drawn, h.position, ng, ns, vec2(0.0f));
+                            }
+                            light += e * kInvPi;
                         }
                         reflected += weight * baseColorAt(view, h) * light;
                     }

@@ -48,7 +48,10 @@ class TraceScene;
 //     TEXCOORD_1, texel centres at (i + ½) / size, clamped at the image's edges
 //     (tools/viewer/viewer.js lightmapAt);
 //   - for any other surface (an emitter, a mesh without TEXCOORD_1, a mesh no atlas took):
-//     kUnlitLight, what the viewer shows there (viewer.js UNLIT_LEVEL).
+//     kUnlitLight, what the viewer shows there (viewer.js UNLIT_LEVEL);
+//   - plus, for the lights an engine draws (LightBake::Indirect, which the lightmaps leave
+//     out), their exact direct light E/π at the hit: a shadow ray a read (a sun's disk by
+//     lighting/direct_light.h sunIrradiance), as an engine's shadow maps draw them.
 // So it differs from the bake's own image in where the light comes from (texels, not the
 // receivers' gather) and in its rays: the bake's image shades its 2 × 2 a pixel merged per
 // triangle. The n² reads a pixel are its 1-pixel box, as the Cycles references

@@ -36,6 +36,8 @@ const std::vector<std::string> kSupportedExtensions = {
     "KHR_materials_ior",           "KHR_texture_transform",
     // Blender writes it (specularColorFactor 0) to say "no specular"; the walls stay Lambert.
     "KHR_materials_specular",
+    // A light's bake mode (scene.h LightBake; docs/light-bake-modes.md).
+    "VOXLIGHT_light_bake",
 };
 
 bool parseVersion(const std::string& text, int& major, int& minor) {
@@ -612,6 +614,12 @@ private:
         if (!(glm::length(direction) > 0.0)) fail(what + " on " + nodeName(nodeIndex) + " has a singular transform");
         light.position = vec3(world[3]);
         light.direction = vec3(glm::normalize(direction));
+        if (const auto bake = source.extensions.find("VOXLIGHT_light_bake"); bake != source.extensions.end()) {
+            const tinygltf::Value& mode = bake->second.Get("mode");
+            if (!mode.IsString() || (mode.Get<std::string>() != "all" && mode.Get<std::string>() != "indirect"))
+                fail(what + ": VOXLIGHT_light_bake.mode must be \"all\" or \"indirect\"");
+            light.bake = mode.Get<std::string>() == "all" ? LightBake::All : LightBake::Indirect;
+        }
         scene_.lights.push_back(light);
     }
 

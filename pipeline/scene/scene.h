@@ -108,6 +108,12 @@ struct Mesh {
 
 enum class LightType { Point, Spot, Directional };
 
+// What a punctual light's bake holds (docs/light-bake-modes.md): its direct and indirect light
+// (All), or its indirect light alone (Indirect), the engine drawing its direct light per pixel
+// with its own shadows, sharp at any texel size. Unset: the bake's setting decides
+// (BakeSettings::lightBake).
+enum class LightBake { Unset, All, Indirect };
+
 struct Light {
     std::string name;
     LightType type = LightType::Point;
@@ -122,6 +128,7 @@ struct Light {
     // irradiance comes evenly from a cone of this diameter, so shadows have penumbrae. 0: a
     // single direction. glTF has none; a job file's light sets it ("angle", degrees).
     float angularDiameter = 0.0f;
+    LightBake bake = LightBake::Unset;
 
     vec3 radiantIntensity() const { return color * intensity; }
 };

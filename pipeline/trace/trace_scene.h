@@ -60,6 +60,7 @@ struct TraceLight {
     float spotScale = 0.0f;    // glTF smooth spot falloff: t = clamp(cos·scale + offset, 0, 1), factor t²
     float spotOffset = 1.0f;
     float cosHalfAngle = 1.0f;  // directional: its disk's half-angle (scene.h angularDiameter); 1 = a point
+    uint32_t engineDrawn = 0;   // 1: the engine draws its direct light (LightBake::Indirect); lightmaps leave it out
 };
 
 struct TraceSceneView {

@@ -55,6 +55,17 @@ TEST_CASE("Every scene.glb the bake writes passes the Khronos glTF validator wit
         job.settings = settings;
         jobs.push_back(job);
     }
+    // A sun the engine draws, added by the job: scene.glb gains a KHR_lights_punctual light
+    // with its VOXLIGHT_light_bake mode.
+    BakeJob sunlit = jobs.back();
+    sunlit.scenePath = sourceDir() + "/scenes/two_rooms.gltf";
+    Light sun;
+    sun.name = "sun";
+    sun.type = LightType::Directional;
+    sun.direction = glm::normalize(vec3(0.3f, -1.0f, 0.2f));
+    sun.bake = LightBake::Indirect;
+    sunlit.addedLights = {sun};
+    jobs.push_back(sunlit);
     for (size_t j = 0; j < jobs.size(); ++j) {
         jobs[j].outputDir = (fs::path(tempDir("glb-validator")) / ("scene" + std::to_string(j))).string();
         fs::remove_all(jobs[j].outputDir);

@@ -3,6 +3,7 @@
 // surface outside every lightmap shows albedo × the viewer's unlit level; n × n reads a pixel
 // give the lightmap's mean over the pixel; the bake writes it beside its own image, and it
 // agrees with that image where the lightmap resolves the light.
+#include "bake/bake.h"
 #include "bake/bake_job.h"
 #include "bake/bake_settings.h"
 #include "core/settings_table.h"
@@ -286,4 +287,86 @@ TEST_CASE("lightmap-image-subsamples takes 1 to 16 rays a side and refuses the r
     }
     CHECK(settings.lightmapImageSubsamples == 16);
     CHECK_THAT(describeBakeSettings(settings), Catch::Contains("lightmap-image-subsamples=16"));
+}
+
+TEST_CASE("A sun the engine draws (light bake indirect): the lightmap leaves its direct light out and the "
+          "lightmap-lit image draws it exact per read, sharp at a slit's edge",
+          "[bake]") {
+    // A floor 2 × 2 m (albedo 0.5, a 32² lightmap: 6.25 cm texels) under a sun straight down
+    // through a slit 20 cm wide in a roof 0.5 m up. A camera 0.4 m over the floor, under the
+    // roof, sees the floor 0.44 m across in 64 pixels (6.8 mm each). The sun lights the floor
+    // exactly over |x| < 0.1: E = 3 W/m², so a pixel there shows 0.5 · 3/π plus a little
+    // indirect light, and one beside it in the shade only that little.
+    Scene scene;
+    scene.sourcePath = "slit (test)";
+    const float albedo = 0.5f, sunE = 3.0f, slit = 0.1f;
+    const int floor = addMaterial(scene, vec3(albedo));
+    const int roof = addMaterial(scene, vec3(albedo));
+    scene.meshes.push_back(groundQuad("floor", -1.0f, 1.0f, -1.0f, 1.0f, floor));
+    for (const float side : {-1.0f, 1.0f}) {
+        Mesh half = groundQuad(side < 0 ? "roof-" : "roof+", side < 0 ? -1.5f : slit, side < 0 ? -slit : 1.5f, -1.5f,
+                               1.5f, roof, false);
+        for (vec3& p : half.positions) p.y = 0.5f;
+        scene.meshes.push_back(half);
+    }
+    Light sun;
+    sun.name = "sun";
+    sun.type = LightType::Directional;
+    sun.direction = vec3(0, -1, 0);
+    sun.intensity = sunE;
+    scene.lights.push_back(sun);
+    Camera camera = cameraLookingDown(vec3(0.0f, 0.4f, 0.0f));
+    camera.name = "down";
+    scene.cameras.push_back(camera);
+
+    BakeSettings settings;
+    settings.quiet = true;
+    settings.generateLightmapUvs = false;  // the roof, unseen, keeps no lightmap
+    settings.outputs.grids = settings.outputs.gltf = false;
+    settings.lightmap.width = settings.lightmap.height = 32;
+    settings.imageWidth = settings.imageHeight = 64;
+    const auto bakeIn = [&](LightBake mode) {
+        settings.lightBake = mode;
+        Diagnostics diagnostics(false, false);
+        return bake(scene, settings, diagnostics);
+    };
+    const BakeResult all = bakeIn(LightBake::All), drawn = bakeIn(LightBake::Indirect);
+    REQUIRE(drawn.lightmaps.size() == 1);
+    REQUIRE(drawn.images.size() == 1);
+
+    // The lightmap holds no direct light (the sun is the only light), and the same indirect
+    // light as when the sun is baked whole: its bounces are the bake's either way.
+    double directAll = 0.0, indirectAll = 0.0, indirectDrawn = 0.0;
+    for (size_t k = 0; k < drawn.lightmaps[0].direct.pixels.size(); ++k) {
+        CHECK(drawn.lightmaps[0].direct.pixels[k] == 0.0f);
+        directAll += all.lightmaps[0].direct.pixels[k];
+        indirectAll += all.lightmaps[0].indirect.pixels[k];
+        indirectDrawn += drawn.lightmaps[0].indirect.pixels[k];
+    }
+    CHECK(directAll > 0.0);
+    CHECK(indirectDrawn == Approx(indirectAll).epsilon(0.01));
+
+    // Along the middle row: pixels whose footprint lies wholly in the sun or wholly in the
+    // shade, a pixel or more from the edge.
+    const float halfWidth = 0.4f * std::tan(0.5f), pixel = 2.0f * halfWidth / 64.0f;
+    const double lit = albedo * sunE / kPi;
+    const auto worst = [&](const BakeResult& result, bool inSun) {
+        double err = 0.0;
+        for (int x = 0; x < 64; ++x) {
+            const float worldX = ((x + 0.5f) / 64.0f * 2.0f - 1.0f) * halfWidth;
+            const float fromEdge = std::abs(worldX) - slit;  // < 0 in the sun
+            if (inSun ? fromEdge > -1.5f * pixel : fromEdge < 1.5f * pixel) continue;
+            const double value = result.images[0].lightmapped.at(x, 32, 1);
+            err = std::max(err, std::abs(value - (inSun ? lit : 0.0)) / lit);
+        }
+        return err;
+    };
+    // Exact per read: the sun's pixels within the indirect light (a few percent), the shade's too.
+    CHECK(worst(drawn, true) < 0.05);
+    CHECK(worst(drawn, false) < 0.05);
+    // Baked whole, the sun's edge is a texel's blur: pixels a pixel or two off the edge are
+    // far from either side.
+    CHECK(std::max(worst(all, true), worst(all, false)) > 0.15);
+    // The camera's own image is the whole light in both.
+    CHECK(compareImages(drawn.images[0].beauty, all.images[0].beauty).relativeRmse < 1e-6);
 }

@@ -4,6 +4,7 @@
 // ../shared/reference (cornell_sky.gltf, world radiance (0.6, 0.75, 1.0)).
 #include "bake/bake.h"
 #include "bake/bake_settings.h"
+#include "core/settings_table.h"
 #include "lighting/direct_light.h"
 #include "bake/job_file.h"
 #include "receivers/receivers.h"
@@ -287,4 +288,30 @@ TEST_CASE("A bake under a sky and a sun with a disk is the same at 1 and 2 threa
     double indirect = 0.0;
     for (float v : one.lightmaps[0].indirect.pixels) indirect += v;
     CHECK(indirect > 0.0);  // the sky and sun did bounce
+}
+
+TEST_CASE("A light's bake mode: a job file's light gives its own, the light-bake setting the rest, bad modes refused",
+          "[bake]") {
+    const fs::path dir = tempDir("job-light-bake");
+    std::ofstream(dir / "job.json") << R"({"settings": {"light-bake": "indirect"}, "scenes": [{"path": "a.gltf", "lights": [
+        {"type": "directional", "direction": [0, -1, 0], "bake": "all"},
+        {"type": "point", "position": [0, 1, 0]}]}]})";
+    const std::vector<BakeJob> jobs = readJobFile((dir / "job.json").string(), BakeSettings{}, "output");
+    REQUIRE(jobs.at(0).addedLights.size() == 2);
+    CHECK(jobs[0].settings.lightBake == LightBake::Indirect);
+    Scene scene;
+    scene.lights = jobs[0].addedLights;
+    scene.lights.push_back(Light{});  // a glTF light without a mode of its own
+    resolveLightBake(scene, jobs[0].settings.lightBake);
+    CHECK(scene.lights[0].bake == LightBake::All);  // its own wins
+    CHECK(scene.lights[1].bake == LightBake::Indirect);
+    CHECK(scene.lights[2].bake == LightBake::Indirect);
+
+    std::ofstream(dir / "bad.json") << R"({"scenes": [{"path": "a.gltf", "lights": [
+        {"type": "point", "position": [0, 1, 0], "bake": "shadow"}]}]})";
+    CHECK_THROWS_WITH(readJobFile((dir / "bad.json").string(), BakeSettings{}, "output"),
+                      Catch::Contains("bad.json") && Catch::Contains("lights[0].bake") && Catch::Contains("\"shadow\""));
+    BakeSettings settings;
+    CHECK_THROWS_WITH(applySetting(bakeSettingsTable(), settings, "light-bake", "none"),
+                      Catch::Contains("light-bake") && Catch::Contains("'none'") && Catch::Contains("all, indirect"));
 }

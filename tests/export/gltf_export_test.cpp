@@ -6,6 +6,9 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <fstream>
+
 using namespace vl;
 
 namespace {
@@ -129,4 +132,65 @@ TEST_CASE("glTF out copies a material that serves several lightmaps or unlit pri
           before.materials[size_t(shared)].pbrMetallicRoughness.baseColorFactor);
     CHECK_FALSE(lightmapOf(after.materials[size_t(shared)]));
     for (size_t k = 2; k < users.size(); ++k) CHECK(materialOf(users[k]) == shared);
+}
+
+TEST_CASE("glTF out marks every light's bake mode and adds the job file's lights the engine must draw", "[export]") {
+    // The point-lit Cornell box has one light of its own (no mode: the setting's, all). A job
+    // file adds a sun the engine draws and a lamp baked whole: only the sun is written, with
+    // its intensity back in lux and its node's −Z along its direction, and the file read back
+    // gives the same light.
+    const std::string source = test::sourceDir() + "/scenes/cornell_box_point.gltf";
+    const Scene scene = loadGltf(source);
+    REQUIRE(scene.lights.size() == 1);
+    std::vector<Mesh::Source> sources;
+    for (const Mesh& mesh : scene.meshes) sources.push_back(mesh.source);
+    Light sun;
+    sun.name = "sun";
+    sun.type = LightType::Directional;
+    sun.direction = glm::normalize(vec3(0.75f, -0.45f, -0.2f));
+    sun.color = vec3(1.0f, 0.95f, 0.85f);
+    sun.intensity = 15.0f;
+    sun.bake = LightBake::Indirect;
+    Light lamp;
+    lamp.name = "lamp";
+    lamp.position = vec3(0.1f, 0.4f, 0.2f);
+    const std::string out = test::tempDir("gltf-out-lights") + "/box.glb";
+    Diagnostics diagnostics(false, false);
+    writeLightmappedGlb(source, sources, {}, {}, {}, out, diagnostics, vec3(0.0f), {sun, lamp}, LightBake::All);
+
+    const tinygltf::Model after = reread(out);
+    REQUIRE(after.lights.size() == 2);
+    const auto modeOf = [](const tinygltf::Light& light) {
+        const auto it = light.extensions.find("VOXLIGHT_light_bake");
+        return it == light.extensions.end() ? std::string("none") : it->second.Get("mode").Get<std::string>();
+    };
+    CHECK(modeOf(after.lights[0]) == "all");
+    CHECK(modeOf(after.lights[1]) == "indirect");
+    CHECK(after.lights[1].name == "sun");
+    CHECK(after.lights[1].intensity == Approx(15.0 * 683.0));
+    CHECK(std::count(after.extensionsUsed.begin(), after.extensionsUsed.end(), "VOXLIGHT_light_bake") == 1);
+
+    const Scene reloaded = loadGltf(out);
+    REQUIRE(reloaded.lights.size() == 2);
+    const auto drawn = std::find_if(reloaded.lights.begin(), reloaded.lights.end(),
+                                    [](const Light& l) { return l.name == "sun"; });
+    REQUIRE(drawn != reloaded.lights.end());
+    CHECK(drawn->bake == LightBake::Indirect);
+    CHECK(drawn->type == LightType::Directional);
+    CHECK(glm::length(drawn->direction - sun.direction) < 1e-5f);
+    CHECK(drawn->intensity == Approx(15.0f));
+    CHECK(glm::length(drawn->color - sun.color) < 1e-6f);
+    const auto own = std::find_if(reloaded.lights.begin(), reloaded.lights.end(),
+                                  [](const Light& l) { return l.name != "sun"; });
+    CHECK(own->bake == LightBake::All);
+}
+
+TEST_CASE("A glTF light's bake mode other than all or indirect is refused naming the light", "[export]") {
+    const std::string dir = test::tempDir("gltf-light-bake");
+    std::ofstream(dir + "/bad.gltf") << R"({"asset": {"version": "2.0"}, "extensionsUsed": ["KHR_lights_punctual", "VOXLIGHT_light_bake"],
+        "extensions": {"KHR_lights_punctual": {"lights": [{"name": "lamp", "type": "point", "intensity": 10,
+            "extensions": {"VOXLIGHT_light_bake": {"mode": "sometimes"}}}]}},
+        "nodes": [{"extensions": {"KHR_lights_punctual": {"light": 0}}}], "scenes": [{"nodes": [0]}], "scene": 0})";
+    CHECK_THROWS_WITH(loadGltf(dir + "/bad.gltf"), Catch::Contains("bad.gltf") && Catch::Contains("'lamp'") &&
+                                                        Catch::Contains("VOXLIGHT_light_bake.mode"));
 }

@@ -14,7 +14,8 @@
 // material of each pixel's main sample: an error heat map split by cause (docs/accuracy.md).
 // --truth-lightmap OUT.exr writes the lightmap-lit view from lightmaps whose every texel the path
 // tracer lit (--spp paths a sample, --seed; none from samples inside closed geometry, whose
-// texels are filled from their neighbours), dilated and stitched as the bake's: what the
+// texels are filled from their neighbours; less the direct light of lights the engine draws,
+// light-bake indirect), dilated and stitched as the bake's: what the
 // atlas, its texels and the bilinear read alone cost against the truth (two seeds give their
 // noise), and beside it OUT_texels_<atlas>.exr, the truth's texels as shipped. With
 // --truth-texels T.exr[,T2.exr …] (one file an atlas, in the bake's order) those texels are
@@ -293,7 +294,26 @@ int main(int argc, char** argv) {
                 for (size_t texel = 0; texel < open.elementCount(); ++texel)
                     for (uint32_t k = open.begin[texel]; k < open.begin[texel + 1]; ++k)
                         if (open.samples[k].weight > 0.0f) openWeight.pixels[texel] += open.samples[k].weight;
-                const TraceResult traced = traceIrradiance(tracing.traceScene, tracing.bvh, open, traceSettings);
+                TraceResult traced = traceIrradiance(tracing.traceScene, tracing.bvh, open, traceSettings);
+                // Lights the engine draws (light-bake indirect): the truth a lightmap can hold is
+                // the rest, so their direct light, exact at each sample as the bake's, is taken
+                // off the traced direct light (what is left of their paths' noise is zero-mean).
+                const TraceSceneView view = tracing.traceScene.view();
+                if (std::any_of(view.lights, view.lights + view.lightCount,
+                                [](const TraceLight& l) { return l.engineDrawn != 0; })) {
+                    DirectLightSettings every = job.settings.direct, kept = job.settings.direct;
+                    every.skyAtSamples = kept.skyAtSamples = false;
+                    kept.engineDrawnLights = false;
+                    tbb::parallel_for(size_t(0), open.elementCount(), [&](size_t texel) {
+                        for (uint32_t k = open.begin[texel]; k < open.begin[texel + 1]; ++k) {
+                            const SurfaceSample& sample = open.samples[k];
+                            if (!(sample.weight > 0.0f)) continue;
+                            const vec3 drawn = directIrradiance(view, tracing.bvh.view(), sample, every, k) -
+                                               directIrradiance(view, tracing.bvh.view(), sample, kept, k);
+                            for (int c = 0; c < 3; ++c) traced.direct.pixels[3 * texel + size_t(c)] -= sample.weight * drawn[c] * kInvPi;
+                        }
+                    });
+                }
                 const BakedLightmap truth =
                     finishLightmap(b.atlas, traced.direct, traced.indirect, openWeight, scene, job.settings);
                 truths.push_back({b.meshes, shippedLightmapTexels(truth.total)});

@@ -320,6 +320,14 @@ async function main() {
   if (threeMaterials) renderer.outputColorSpace = THREE.SRGBColorSpace;
   const counts = threeMaterials ? { meshes: await applyMozLightmaps(gltf), unlit: 0 } : await applyBakedMaterials(gltf, shared);
   const world = gltf.scene;
+  // Lights whose direct light the bake left to the engine (VOXLIGHT_light_bake "indirect",
+  // docs/light-bake-modes.md): this page does not draw them yet, so say what is missing.
+  const drawnByEngine = (gltf.parser.json.extensions?.KHR_lights_punctual?.lights ?? [])
+    .filter((light) => light.extensions?.VOXLIGHT_light_bake?.mode === 'indirect')
+    .map((light, i) => light.name || `light ${i}`);
+  if (drawnByEngine.length > 0)
+    report(`the lightmaps hold only the indirect light of ${drawnByEngine.join(', ')} (light-bake indirect); ` +
+           'this viewer does not draw their direct light yet: image_lightmapped.exr shows it');
   // A bake under a uniform sky writes its radiance into the scene's extras (glTF has no sky):
   // lit, the background is that sky, with the exposure and the sRGB curve the shader applies.
   const sky = world.userData?.voxlight?.sky;
