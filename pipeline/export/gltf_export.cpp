@@ -346,8 +346,6 @@ void addCameras(tinygltf::Model& model, const std::vector<Camera>& cameras) {
 }
 
 constexpr const char* kLightBakeExtension = "VOXLIGHT_light_bake";
-// glTF's punctual intensities are photometric: the loader's ÷ 683 undone (scene/gltf_loader.cpp).
-constexpr double kLumensPerWatt = 683.0;
 
 tinygltf::Value lightBakeExtension(LightBake mode) {
     tinygltf::Value::Object object;

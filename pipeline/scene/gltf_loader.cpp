@@ -27,9 +27,6 @@
 namespace vl {
 namespace {
 
-// glTF punctual intensities are photometric (cd, lx); Blender's exporter multiplies watts
-// per steradian by 683 lm/W, so dividing by it gives back radiometric units (DESIGN.md).
-constexpr double kLumensPerWatt = 683.0;
 
 const std::vector<std::string> kSupportedExtensions = {
     "KHR_lights_punctual",         "KHR_materials_emissive_strength", "KHR_materials_transmission",

@@ -114,6 +114,11 @@ enum class LightType { Point, Spot, Directional };
 // (BakeSettings::lightBake).
 enum class LightBake { Unset, All, Indirect };
 
+// glTF punctual intensities are photometric (cd, lx); Blender's exporter multiplies watts
+// per steradian by 683 lm/W, so dividing by it gives back radiometric units (DESIGN.md). The
+// loader divides, glTF out multiplies.
+constexpr double kLumensPerWatt = 683.0;
+
 struct Light {
     std::string name;
     LightType type = LightType::Point;
