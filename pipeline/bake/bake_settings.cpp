@@ -71,7 +71,7 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
          [](S& s, const std::string& v) { s.gather.cone.stepFactor = static_cast<float>(parseRealSetting("step-factor", v, 0.05, 4)); }},
         {"cone-max-distance", "metres a cone marches at most; 0 = until opaque or out of the grid (default 0)",
          [](S& s, const std::string& v) { s.gather.cone.maxDistance = static_cast<float>(parseRealSetting("cone-max-distance", v, 0, 1e9)); }},
-        {"bounces", "voxel-to-voxel bounces before the final gather (default 8)",
+        {"bounces", "voxel-to-voxel bounces before the final gather (default 24)",
          [](S& s, const std::string& v) { s.gather.bounces = parseIntSetting("bounces", v, 0, 1024); }},
         {"bounce-cones", "cones per hemisphere of the voxel-to-voxel bounces: 6, 16 or 32 (default 6)",
          [](S& s, const std::string& v) { s.gather.bounceCones = parseIntSetting("bounce-cones", v, 1, 64); }},

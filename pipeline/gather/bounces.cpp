@@ -332,7 +332,7 @@ Bounced propagateBounces(VoxelScene& voxels, const BounceSettings& bounce, const
     // The series' tail: each further bounce adds r times what the last one did, so the rest
     // sums to ΔL·r/(1 − r) (Cohen et al. 1988's ambient term, from the iteration itself). r is
     // each face's own ratio of its last two increments, capped by the ratio of the whole
-    // scene's: after 8 bounces the parts of a scene have not yet settled to one rate, and the
+    // scene's: after a few bounces the parts of a scene have not yet settled to one rate, and the
     // scene's ratio belongs to whatever keeps its light longest, while the rooms a camera sees
     // may lose theirs faster. The cap keeps a face whose increments are still growing (light
     // arriving late) from blowing up. Why a tail at all: a bright interior keeps most of its

@@ -21,7 +21,7 @@ struct GatherSettings {
     ConeSettings cone = ConeSettings{32};
     // Voxel-to-voxel bounces before the final gather (which is one more), each of bounceCones
     // cones where they go by cones; then the series' geometric tail (gather/bounces.h).
-    int bounces = 8;
+    int bounces = 24;
     int bounceCones = 6;
     bool bounceTail = true;
     // The gather points' cell level (gather/irradiance_cache.h): one point per surface side of
