@@ -153,11 +153,24 @@ std::string quoted(const Scene& scene, uint32_t mesh) { return "'" + scene.meshe
 // surface's back (self-shadowed, or taken as buried). So where the members lie in one plane
 // it takes their mean position; where they bend, the position and triangle of the member
 // nearest that mean.
-void appendSmoothSamples(std::vector<SurfaceSample>& out, const std::vector<SurfaceSample>& samples,
-                         const std::vector<uint32_t>& meshes) {
-    const size_t first = out.size();
-    std::vector<uint32_t> groupOf(samples.size());
+// The groups' working arrays, kept by the caller across a chunk's texels: no allocation a texel.
+struct SmoothGroups {
+    std::vector<uint32_t> groupOf;               // per sample
     std::vector<uint32_t> groupMesh, groupLead;  // per group: its mesh, its first member
+    std::vector<vec3> mean;
+    std::vector<float> nearest;
+    std::vector<uint8_t> flat;
+};
+
+void appendSmoothSamples(std::vector<SurfaceSample>& out, const std::vector<SurfaceSample>& samples,
+                         const std::vector<uint32_t>& meshes, SmoothGroups& scratch) {
+    const size_t first = out.size();
+    std::vector<uint32_t>& groupOf = scratch.groupOf;
+    std::vector<uint32_t>& groupMesh = scratch.groupMesh;
+    std::vector<uint32_t>& groupLead = scratch.groupLead;
+    groupOf.resize(samples.size());
+    groupMesh.clear();
+    groupLead.clear();
     for (size_t k = 0; k < samples.size(); ++k) {
         const SurfaceSample& s = samples[k];
         size_t into = groupMesh.size();
@@ -189,9 +202,12 @@ void appendSmoothSamples(std::vector<SurfaceSample>& out, const std::vector<Surf
         m.weight += s.weight;
     }
     const size_t groups = groupMesh.size();
-    std::vector<vec3> mean(groups);
-    std::vector<float> nearest(groups, std::numeric_limits<float>::infinity());
-    std::vector<bool> flat(groups, true);
+    std::vector<vec3>& mean = scratch.mean;
+    std::vector<float>& nearest = scratch.nearest;
+    std::vector<uint8_t>& flat = scratch.flat;
+    mean.resize(groups);
+    nearest.assign(groups, std::numeric_limits<float>::infinity());
+    flat.assign(groups, 1);
     for (size_t g = 0; g < groups; ++g) mean[g] = out[first + g].position / out[first + g].weight;
     for (size_t k = 0; k < samples.size(); ++k) {
         const size_t g = groupOf[k];
@@ -200,7 +216,7 @@ void appendSmoothSamples(std::vector<SurfaceSample>& out, const std::vector<Surf
         // One plane: the same normal, and the member in its plane to float rounding.
         if (s.normal != lead.normal || glm::abs(glm::dot(s.position - lead.position, lead.normal)) >
                                            1e-5f * (1.0f + glm::length(s.position - lead.position)))
-            flat[g] = false;
+            flat[g] = 0;
         const float dist = glm::length(s.position - mean[g]);
         if (dist < nearest[g]) {
             nearest[g] = dist;
@@ -329,6 +345,7 @@ LightmapAtlas rasterizeAtlas(const Scene& scene, const std::vector<uint32_t>& me
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
         std::vector<SurfaceSample> texelSamples;
         std::vector<uint32_t> texelMeshes;
+        SmoothGroups groups;
         std::vector<SurfaceSample>& out = chunkSamples[c];
         for (size_t texel = c * kChunkTexels; texel < std::min(texels, (c + 1) * kChunkTexels); ++texel) {
             texelSamples.clear();
@@ -348,7 +365,7 @@ LightmapAtlas rasterizeAtlas(const Scene& scene, const std::vector<uint32_t>& me
                 texelMeshes.push_back(f.mesh);
             }
             const size_t before = out.size();
-            if (settings.samplePerTriangle) appendSmoothSamples(out, texelSamples, texelMeshes);
+            if (settings.samplePerTriangle) appendSmoothSamples(out, texelSamples, texelMeshes, groups);
             else out.insert(out.end(), texelSamples.begin(), texelSamples.end());
             perTexel[texel] = uint32_t(out.size() - before);
         }
