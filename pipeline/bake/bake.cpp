@@ -13,6 +13,7 @@
 #include "trace/camera.h"
 #include "voxel/voxelize.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -80,8 +81,28 @@ void checkLightAttenuationNames(const Scene& scene, const LightingSettings& ligh
 }  // namespace
 
 void resolveLightBake(Scene& scene, LightBake setting) {
-    for (Light& light : scene.lights)
+    std::vector<const Light*> masked;
+    for (Light& light : scene.lights) {
         if (light.bake == LightBake::Unset) light.bake = setting;
+        light.maskChannel = -1;
+        if (light.bake != LightBake::Shadowmask) continue;
+        const std::string named = "light '" + light.name + "'";
+        for (const Light* earlier : masked)
+            if (light.sourceLight >= 0 && earlier->sourceLight == light.sourceLight)
+                throw InputError(scene.sourcePath + ": " + named + " (KHR_lights_punctual light " +
+                                 std::to_string(light.sourceLight) +
+                                 ") is placed by several nodes: a shadowmask channel holds one light's shadows; "
+                                 "give it the bake mode \"indirect\" or \"all\"");
+        if (masked.size() == size_t(kShadowmaskChannels)) {
+            std::string held;
+            for (const Light* earlier : masked) held += (held.empty() ? "'" : ", '") + earlier->name + "'";
+            throw InputError(scene.sourcePath + ": " + named + " is a fifth shadowmask light; a shadowmask holds " +
+                             std::to_string(kShadowmaskChannels) + " (" + held +
+                             "): give it the bake mode \"indirect\" or \"all\"");
+        }
+        light.maskChannel = int(masked.size());
+        masked.push_back(&light);
+    }
 }
 
 double estimateBakeMemory(const Scene& scene, const BakeSettings& settings, double voxelSize) {
@@ -324,8 +345,11 @@ BakedImage bakeCameraImage(const ReceiverGather& gather, const ReceiverScene& tr
 }
 
 BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, const Image& indirect, const Image& open,
-                             const Scene& scene, const BakeSettings& settings) {
-    BakedLightmap baked{atlas.name, Image(), direct, indirect, atlas.mask, atlas.coveredTexels, 0, atlas.meshes, {}};
+                             const Scene& scene, const BakeSettings& settings, const Image& shadowmask) {
+    BakedLightmap baked{atlas.name, Image(), direct, indirect, atlas.mask, atlas.coveredTexels, 0, atlas.meshes, {}, shadowmask};
+    if (!shadowmask.empty() && (shadowmask.width != atlas.mask.width || shadowmask.height != atlas.mask.height ||
+                                shadowmask.channels != kShadowmaskChannels))
+        throw Error("finishLightmap: the shadowmask is not the atlas's size, or not RGBA");
     if (!open.pixels.empty()) {
         const SurfaceSampleSet& set = atlas.receivers;
         if (open.width != set.width || open.height != set.height)
@@ -341,6 +365,11 @@ BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, co
                 baked.direct.pixels[3 * texel + size_t(c)] *= scale;
                 baked.indirect.pixels[3 * texel + size_t(c)] *= scale;
             }
+            if (!baked.shadowmask.empty())
+                for (size_t c = 0; c < size_t(kShadowmaskChannels); ++c) {
+                    float& seen = baked.shadowmask.pixels[size_t(kShadowmaskChannels) * texel + c];
+                    seen = std::min(1.0f, seen * scale);
+                }
             if (shown > 0.0f) continue;
             baked.mask.pixels[texel] = 0.0f;
             ++baked.buriedTexels;
@@ -350,8 +379,9 @@ BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, co
     // Padding texels (and buried ones) take their neighbours' values, so bilinear filtering at
     // chart edges does not bleed black.
     for (Image* image : {&baked.total, &baked.direct, &baked.indirect}) dilatePadding(*image, baked.mask);
+    if (!baked.shadowmask.empty()) dilatePadding(baked.shadowmask, baked.mask);
     baked.seams = finishLightmapSeams(scene, atlas.meshes, baked.mask, baked.direct, baked.indirect, baked.total,
-                                      settings.lightmapStitch);
+                                      settings.lightmapStitch, &baked.shadowmask);
     return baked;
 }
 
@@ -363,7 +393,7 @@ void addLightmapImages(const Scene& scene, const ReceiverScene& tracing, const B
                        BakeResult& result) {
     std::vector<ShippedLightmap> shipped;
     for (const BakedLightmap& lightmap : result.lightmaps)
-        shipped.push_back({lightmap.meshes, shippedLightmapTexels(lightmap.total)});
+        shipped.push_back({lightmap.meshes, shippedLightmapTexels(lightmap.total), shippedShadowmask(lightmap.shadowmask)});
     const std::vector<Camera> cameras = bakeCameras(scene, settings);
     for (size_t c = 0; c < cameras.size() && c < result.images.size(); ++c) {
         const CameraModel model = makeCameraModel(cameras[c], settings.imageWidth, settings.imageHeight);
@@ -380,7 +410,8 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
         timed(result.stages, "lightmaps", [&] {
             for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics)) {
                 const ReceiverLighting lit = receivers.atlasRows(atlas, 0, atlas.receivers.height);
-                result.lightmaps.push_back(finishLightmap(atlas, lit.direct, lit.indirect, lit.open, scene, settings));
+                result.lightmaps.push_back(
+                    finishLightmap(atlas, lit.direct, lit.indirect, lit.open, scene, settings, lit.shadowmask));
             }
             return 0;
         });

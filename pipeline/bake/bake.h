@@ -37,6 +37,7 @@ struct BakedLightmap {
     size_t buriedTexels = 0;       // covered, but wholly inside closed geometry: filled as padding
     std::vector<uint32_t> meshes;  // indices into Scene::meshes baked into it
     LightmapSeamReport seams;      // its chart seams' jumps, before and after stitching
+    Image shadowmask;              // RGBA 0..1, padding dilated (gather/shadowmask.h); empty: no shadowmask light
 };
 
 struct BakedImage {
@@ -123,9 +124,10 @@ BakedImage bakeCameraImage(const ReceiverGather& gather, const ReceiverScene& tr
 // (ReceiverLighting::open, may be empty): a texel partly inside closed geometry holds the light
 // of its open samples alone, and one wholly inside is filled as padding is, so that bilinear
 // filtering beside it (a wall at a panel's foot) does not pull in black. `scene`: the one the
-// atlas was built from (its TEXCOORD_1).
+// atlas was built from (its TEXCOORD_1). A `shadowmask` (ReceiverLighting::shadowmask, may be
+// empty) is scaled to its open samples, dilated and stitched as the light is.
 BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, const Image& indirect, const Image& open,
-                             const Scene& scene, const BakeSettings& settings);
+                             const Scene& scene, const BakeSettings& settings, const Image& shadowmask = Image());
 
 // Whether a bake with these settings renders its cameras' lightmap-lit images: it asks for
 // them and bakes both lightmaps and images.
@@ -148,7 +150,10 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
 // voxel size counts no voxels.
 double estimateBakeMemory(const Scene& scene, const BakeSettings& settings, double voxelSize);
 
-// Gives every light without a bake mode of its own (LightBake::Unset) the setting's.
+// Gives every light without a bake mode of its own (LightBake::Unset) the setting's, and each
+// LightBake::Shadowmask light its channel of the shadowmask, in the scene's order. InputError
+// naming the scene and the light for a fifth shadowmask light, or one a glTF file places by
+// several nodes (one channel, one place).
 void resolveLightBake(Scene& scene, LightBake setting);
 
 // Refuses, before any work, a bake whose estimated memory exceeds what the machine has

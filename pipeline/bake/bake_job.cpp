@@ -55,6 +55,15 @@ public:
     void png(const Image& image, const std::string& file) {
         add(file, [&image](const std::string& p) { writePngSrgb(image, p); });
     }
+    // 8-bit linear RGBA, as stored (a shadowmask).
+    void png8(int width, int height, const std::vector<uint8_t>& rgba, const std::string& file) {
+        add(file, [width, height, &rgba](const std::string& p) {
+            const std::vector<uint8_t> png = encodePng8(width, height, 4, rgba);
+            std::ofstream out(p, std::ios::binary);
+            out.write(reinterpret_cast<const char*>(png.data()), std::streamsize(png.size()));
+            if (!out) throw Error("cannot write " + p);
+        });
+    }
     void add(const std::string& file, std::function<void(const std::string&)> write) {
         writes_.push_back({(dir_ / file).string(), std::move(write)});
         report_.files.push_back(file);
@@ -230,6 +239,7 @@ ExportSource exportSourceOf(const Scene& scene) {
     source.sourcePath = scene.sourcePath;
     for (const Mesh& mesh : scene.meshes) source.meshSources.push_back(mesh.source);
     source.viewerSky = scene.sky.meanRadiance();  // glTF holds no sky: viewers get its mean
+    source.lights = scene.lights;
     return source;
 }
 
@@ -252,7 +262,11 @@ void writeBakeFiles(const BakeJob& job, BakeResult& result, const ExportSource& 
         report.lightmapSeams = combineSeamReports(seams);
     }
     StagedFiles files(staging, report);
-    for (const BakedLightmap& lightmap : result.lightmaps) {
+    std::vector<std::vector<uint8_t>> shadowmasks;  // per lightmap, as scene.glb carries them
+    for (const BakedLightmap& lightmap : result.lightmaps)
+        shadowmasks.push_back(lightmap.shadowmask.empty() ? std::vector<uint8_t>() : shadowmaskBytes(lightmap.shadowmask));
+    for (size_t l = 0; l < result.lightmaps.size(); ++l) {
+        const BakedLightmap& lightmap = result.lightmaps[l];
         report.lightmapTexels += lightmap.total.pixels.size() / 3;
         report.coveredTexels += lightmap.coveredTexels;
         report.buriedTexels += lightmap.buriedTexels;
@@ -262,6 +276,8 @@ void writeBakeFiles(const BakeJob& job, BakeResult& result, const ExportSource& 
         files.exr(lightmap.indirect, stem + "_indirect.exr");
         files.exr(lightmap.mask, stem + "_mask.exr");
         files.png(lightmap.total, stem + ".png");
+        if (!shadowmasks[l].empty())
+            files.png8(lightmap.shadowmask.width, lightmap.shadowmask.height, shadowmasks[l], stem + "_shadowmask.png");
     }
     for (size_t c = 0; c < result.images.size(); ++c) {
         const BakedImage& image = result.images[c];
@@ -287,10 +303,13 @@ void writeBakeFiles(const BakeJob& job, BakeResult& result, const ExportSource& 
     if (settings.outputs.gltf && isGltfFile(source.sourcePath))
         files.add("scene.glb", [&](const std::string& p) {
             std::vector<ExportedLightmap> lightmaps;
-            for (const BakedLightmap& lightmap : result.lightmaps)
-                lightmaps.push_back({lightmap.name, lightmap.meshes, encodeRgbm(lightmap.total)});
+            for (size_t l = 0; l < result.lightmaps.size(); ++l) {
+                const BakedLightmap& lightmap = result.lightmaps[l];
+                lightmaps.push_back({lightmap.name, lightmap.meshes, encodeRgbm(lightmap.total), shadowmasks[l]});
+            }
             writeLightmappedGlb(source.sourcePath, source.meshSources, result.generatedLayouts, lightmaps,
-                                job.addedCameras, p, diagnostics, source.viewerSky, job.addedLights, settings.lightBake);
+                                job.addedCameras, p, diagnostics, source.viewerSky, job.addedLights, settings.lightBake,
+                                source.lights);
         });
     files.writeAll();
     report.stages.push_back({"write", std::chrono::duration<double>(std::chrono::steady_clock::now() - writeStart).count()});

@@ -68,6 +68,7 @@ struct ExportSource {
     std::string sourcePath;
     std::vector<Mesh::Source> meshSources;
     vec3 viewerSky{0.0f};  // glTF holds no sky: viewers get its mean radiance
+    std::vector<Light> lights;  // the scene's, bake modes resolved (bake.h resolveLightBake)
 };
 ExportSource exportSourceOf(const Scene& scene);
 

@@ -104,11 +104,10 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
                  throw SettingsError("setting materials = '" + v + "' is not one of authored, lambert");
              s.lambertMaterials = v == "lambert";
          }},
-        {"light-bake", "what the lightmaps hold of each point, spot and directional light without a bake mode of its own: all (its direct and indirect light) or indirect (its indirect light alone; the engine draws its direct light, and image_lightmapped draws it exactly per read) (default all)",
+        {"light-bake", "what the lightmaps hold of each point, spot and directional light without a bake mode of its own: all (its direct and indirect light), indirect (its indirect light alone; the engine draws its direct light, and image_lightmapped draws it exactly per read) or shadowmask (as indirect, plus its visibility per texel in a channel of the atlas's shadowmask image, four lights at most; the engine draws its unshadowed direct light times the mask) (default all)",
          [](S& s, const std::string& v) {
-             if (v != "all" && v != "indirect")
-                 throw SettingsError("setting light-bake = '" + v + "' is not one of all, indirect");
-             s.lightBake = v == "all" ? LightBake::All : LightBake::Indirect;
+             if (!parseLightBake(v, s.lightBake))
+                 throw SettingsError("setting light-bake = '" + v + "' is not one of all, indirect, shadowmask");
          }},
         {"lightmap-gather", "where lightmaps gather their indirect light: texels (records on the atlas's own texels) or points (the voxel gather points images use); texels needs gather-visibility rays (default texels)",
          [](S& s, const std::string& v) {
@@ -293,7 +292,7 @@ std::string describeBakeSettings(const BakeSettings& s) {
     if (s.lightmap.texelSize > 0.0) out << ", lightmap-texel=" << numberText(s.lightmap.texelSize);
     if (!s.generateLightmapUvs) out << ", lightmap-uvs=false";
     if (s.lambertMaterials) out << ", materials=lambert";
-    if (s.lightBake == LightBake::Indirect) out << ", light-bake=indirect";
+    if (s.lightBake != LightBake::All) out << ", light-bake=" << lightBakeName(s.lightBake);
     if (s.lightmapSide != LightmapSide::Inside) out << ", lightmap-side=" << toString(s.lightmapSide);
     if (!s.lightmapStitch) out << ", lightmap-stitch=false";
     if (!s.gather.lightmapGradients) out << ", lightmap-gradients=false";

@@ -234,9 +234,8 @@ Light readLight(const json& object, const std::string& where) {
     }
     if (object.contains("bake")) {
         const nlohmann::json& mode = object["bake"];
-        if (!mode.is_string() || (mode != "all" && mode != "indirect"))
-            throw InputError(where + ".bake: " + mode.dump() + " is not \"all\" or \"indirect\"");
-        light.bake = mode == "all" ? LightBake::All : LightBake::Indirect;
+        if (!mode.is_string() || !parseLightBake(mode.get<std::string>(), light.bake))
+            throw InputError(where + ".bake: " + mode.dump() + " is not \"all\", \"indirect\" or \"shadowmask\"");
     }
     if (light.type == LightType::Spot) {
         light.innerConeAngle = object.value("innerConeAngle", 0.0f);

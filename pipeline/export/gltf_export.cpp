@@ -2,6 +2,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/image_io.h"
 #include "scene/gltf_accessor.h"
 #include "scene/gltf_model.h"
 
@@ -18,6 +19,7 @@ namespace vl {
 namespace {
 
 constexpr const char* kLightmapExtension = "MOZ_lightmap";
+constexpr const char* kShadowmaskExtension = "VOXLIGHT_shadowmask";
 constexpr int kLinear = 9729;       // GL_LINEAR
 constexpr int kClampToEdge = 33071;  // GL_CLAMP_TO_EDGE
 constexpr int kArrayBuffer = 34962;
@@ -222,10 +224,15 @@ WrittenLayouts writeLayouts(tinygltf::Model& model, BinaryBuffer& bin, const std
     return written;
 }
 
-// Each lightmap's PNG, with a linear clamped sampler (no mipmaps: averaging RGBM texels is not
-// averaging light), as a texture; their indices.
-std::vector<int> addLightmapTextures(tinygltf::Model& model, BinaryBuffer& bin, const std::vector<ExportedLightmap>& lightmaps) {
-    std::vector<int> textureOf;
+struct LightmapTextures {
+    std::vector<int> lightmap;    // per lightmap
+    std::vector<int> shadowmask;  // per lightmap; -1: none
+};
+
+// Each lightmap's PNG, and its shadowmask's, with a linear clamped sampler (no mipmaps:
+// averaging RGBM texels is not averaging light), as textures; their indices.
+LightmapTextures addLightmapTextures(tinygltf::Model& model, BinaryBuffer& bin, const std::vector<ExportedLightmap>& lightmaps) {
+    LightmapTextures textureOf;
     if (lightmaps.empty()) return textureOf;
     tinygltf::Sampler sampler;
     sampler.magFilter = kLinear;
@@ -235,21 +242,40 @@ std::vector<int> addLightmapTextures(tinygltf::Model& model, BinaryBuffer& bin, 
     sampler.name = "lightmap";
     model.samplers.push_back(sampler);
     const int samplerIndex = static_cast<int>(model.samplers.size()) - 1;
-    for (const ExportedLightmap& lightmap : lightmaps) {
-        const std::vector<uint8_t> png = rgbmPng(lightmap.encoded);
+    const auto addTexture = [&](const std::string& name, const std::vector<uint8_t>& png) {
         tinygltf::Image image;
-        image.name = lightmap.name;
+        image.name = name;
         image.mimeType = "image/png";
         image.bufferView = bin.addView(model, png.data(), png.size());
         model.images.push_back(image);
         tinygltf::Texture texture;
-        texture.name = lightmap.name;
+        texture.name = name;
         texture.source = static_cast<int>(model.images.size()) - 1;
         texture.sampler = samplerIndex;
         model.textures.push_back(texture);
-        textureOf.push_back(static_cast<int>(model.textures.size()) - 1);
+        return static_cast<int>(model.textures.size()) - 1;
+    };
+    for (const ExportedLightmap& lightmap : lightmaps) {
+        textureOf.lightmap.push_back(addTexture(lightmap.name, rgbmPng(lightmap.encoded)));
+        if (lightmap.shadowmask.empty()) {
+            textureOf.shadowmask.push_back(-1);
+            continue;
+        }
+        if (lightmap.shadowmask.size() != size_t(lightmap.encoded.width) * size_t(lightmap.encoded.height) * 4)
+            throw Error("writeLightmappedGlb: lightmap '" + lightmap.name + "': its shadowmask is not its size");
+        textureOf.shadowmask.push_back(addTexture(
+            lightmap.name + " shadowmask",
+            encodePng8(lightmap.encoded.width, lightmap.encoded.height, 4, lightmap.shadowmask)));
     }
     return textureOf;
+}
+
+// VOXLIGHT_shadowmask of a material: the shadowmask's texture, read through TEXCOORD_1.
+tinygltf::Value shadowmaskExtension(int texture) {
+    tinygltf::Value::Object object;
+    object["index"] = tinygltf::Value(texture);
+    object["texCoord"] = tinygltf::Value(1);
+    return tinygltf::Value(object);
 }
 
 // Which lightmap each glTF primitive was baked into.
@@ -280,7 +306,7 @@ std::map<PrimitiveKey, size_t> lightmapOfPrimitives(const tinygltf::Model& model
 // Points every lightmapped primitive's material at its lightmap: the material itself when it
 // serves that lightmap alone, else a copy per lightmap (the unlit primitives keep the original).
 void attachLightmaps(tinygltf::Model& model, const std::map<PrimitiveKey, size_t>& lightmapOf,
-                     const std::vector<int>& textureOf, const std::vector<ExportedLightmap>& lightmaps) {
+                     const LightmapTextures& textureOf, const std::vector<ExportedLightmap>& lightmaps) {
     constexpr size_t kUnlit = static_cast<size_t>(-1);
     std::map<int, std::set<size_t>> usesOf;  // material (−1: the default) → lightmaps, kUnlit
     for (size_t m = 0; m < model.meshes.size(); ++m)
@@ -300,7 +326,10 @@ void attachLightmaps(tinygltf::Model& model, const std::map<PrimitiveKey, size_t
                 target = static_cast<int>(model.materials.size()) - 1;
             }
             model.materials[size_t(target)].extensions[kLightmapExtension] =
-                lightmapExtension(textureOf[a], lightmaps[a].encoded.range);
+                lightmapExtension(textureOf.lightmap[a], lightmaps[a].encoded.range);
+            if (textureOf.shadowmask[a] >= 0)
+                model.materials[size_t(target)].extensions[kShadowmaskExtension] =
+                    shadowmaskExtension(textureOf.shadowmask[a]);
             materialFor[{material, a}] = target;
         }
     for (const auto& [key, a] : lightmapOf) {
@@ -310,6 +339,9 @@ void attachLightmaps(tinygltf::Model& model, const std::map<PrimitiveKey, size_t
     if (!lightmaps.empty() &&
         std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), kLightmapExtension) == model.extensionsUsed.end())
         model.extensionsUsed.push_back(kLightmapExtension);
+    if (std::any_of(textureOf.shadowmask.begin(), textureOf.shadowmask.end(), [](int t) { return t >= 0; }) &&
+        std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), kShadowmaskExtension) == model.extensionsUsed.end())
+        model.extensionsUsed.push_back(kShadowmaskExtension);
 }
 
 // tinygltf writes `zfar` always, and 0 (its "infinite projection") is invalid glTF: a camera
@@ -347,19 +379,45 @@ void addCameras(tinygltf::Model& model, const std::vector<Camera>& cameras) {
 
 constexpr const char* kLightBakeExtension = "VOXLIGHT_light_bake";
 
-tinygltf::Value lightBakeExtension(LightBake mode) {
+// A shadowmask without a channel (a light the bake did not place) is written as indirect: the
+// engine draws it whole.
+tinygltf::Value lightBakeExtension(LightBake mode, int channel = -1) {
+    if (mode == LightBake::Shadowmask && channel < 0) mode = LightBake::Indirect;
     tinygltf::Value::Object object;
-    object["mode"] = tinygltf::Value(std::string(mode == LightBake::Indirect ? "indirect" : "all"));
+    object["mode"] = tinygltf::Value(std::string(lightBakeName(mode)));
+    if (mode == LightBake::Shadowmask) object["channel"] = tinygltf::Value(channel);
     return tinygltf::Value(object);
 }
 
 // A glTF light's direction is its node's −Z.
-void addLightBakes(tinygltf::Model& model, const std::vector<Light>& addedLights, LightBake setting) {
-    for (tinygltf::Light& light : model.lights)
-        if (!light.extensions.count(kLightBakeExtension)) light.extensions[kLightBakeExtension] = lightBakeExtension(setting);
-    for (const Light& light : addedLights) {
-        const LightBake mode = light.bake == LightBake::Unset ? setting : light.bake;
-        if (mode != LightBake::Indirect) continue;
+void addLightBakes(tinygltf::Model& model, const std::vector<Light>& addedLights, LightBake setting,
+                   const std::vector<Light>& bakedLights) {
+    for (size_t i = 0; i < model.lights.size(); ++i) {
+        tinygltf::Light& light = model.lights[i];
+        const auto baked = std::find_if(bakedLights.begin(), bakedLights.end(),
+                                        [&](const Light& l) { return l.sourceLight == int(i); });
+        if (baked != bakedLights.end())
+            light.extensions[kLightBakeExtension] = lightBakeExtension(baked->bake, baked->maskChannel);
+        else if (const auto own = light.extensions.find(kLightBakeExtension); own != light.extensions.end()) {
+            LightBake mode = LightBake::All;
+            const tinygltf::Value& name = own->second.Get("mode");
+            if (name.IsString()) parseLightBake(name.Get<std::string>(), mode);
+            own->second = lightBakeExtension(mode);
+        } else
+            light.extensions[kLightBakeExtension] = lightBakeExtension(setting);
+    }
+    std::vector<const Light*> bakedAdded;  // a job file's lights as the bake resolved them, in order
+    for (const Light& light : bakedLights)
+        if (light.sourceLight < 0) bakedAdded.push_back(&light);
+    if (!bakedLights.empty() && bakedAdded.size() != addedLights.size())
+        throw Error("writeLightmappedGlb: " + std::to_string(addedLights.size()) + " added lights, the bake resolved " +
+                    std::to_string(bakedAdded.size()));
+    for (size_t k = 0; k < addedLights.size(); ++k) {
+        const Light& light = addedLights[k];
+        const Light* baked = bakedAdded.empty() ? nullptr : bakedAdded[k];
+        const LightBake mode = baked ? baked->bake : light.bake == LightBake::Unset ? setting : light.bake;
+        const int channel = baked ? baked->maskChannel : -1;
+        if (mode != LightBake::Indirect && mode != LightBake::Shadowmask) continue;
         tinygltf::Light written;
         written.name = light.name;
         written.type = light.type == LightType::Point ? "point" : light.type == LightType::Spot ? "spot" : "directional";
@@ -370,7 +428,7 @@ void addLightBakes(tinygltf::Model& model, const std::vector<Light>& addedLights
             written.spot.innerConeAngle = light.innerConeAngle;
             written.spot.outerConeAngle = light.outerConeAngle;
         }
-        written.extensions[kLightBakeExtension] = lightBakeExtension(mode);
+        written.extensions[kLightBakeExtension] = lightBakeExtension(mode, channel);
         model.lights.push_back(written);
         if (model.scenes.empty()) model.scenes.emplace_back();
         tinygltf::Node node;
@@ -397,7 +455,8 @@ void addLightBakes(tinygltf::Model& model, const std::vector<Light>& addedLights
 void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Source>& meshes,
                          const std::vector<GeneratedLayout>& layouts, const std::vector<ExportedLightmap>& lightmaps,
                          const std::vector<Camera>& addedCameras, const std::string& path, Diagnostics& diagnostics,
-                         const vec3& sky, const std::vector<Light>& addedLights, LightBake lightBake) {
+                         const vec3& sky, const std::vector<Light>& addedLights, LightBake lightBake,
+                         const std::vector<Light>& bakedLights) {
     if (!layouts.empty() && layouts.size() != meshes.size())
         throw Error("writeLightmappedGlb: " + std::to_string(layouts.size()) + " layouts for " +
                     std::to_string(meshes.size()) + " meshes");
@@ -408,12 +467,12 @@ void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Sour
     BinaryBuffer bin;
     packBuffers(model, encoded, bin, source, diagnostics);
     const WrittenLayouts written = writeLayouts(model, bin, meshes, layouts, source, diagnostics);
-    const std::vector<int> textureOf = addLightmapTextures(model, bin, lightmaps);
+    const LightmapTextures textureOf = addLightmapTextures(model, bin, lightmaps);
     attachLightmaps(model, lightmapOfPrimitives(model, meshes, written, lightmaps, source, diagnostics), textureOf,
                     lightmaps);
 
     addCameras(model, addedCameras);
-    addLightBakes(model, addedLights, lightBake);
+    addLightBakes(model, addedLights, lightBake, bakedLights);
     giveFarPlanes(model);
 
     if (maxComponent(sky) > 0.0f && !model.scenes.empty()) {

@@ -18,6 +18,7 @@
 #include "scene/scene.h"
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace vl {
@@ -34,6 +35,15 @@ struct ExportedLightmap {
     std::string name;              // the atlas ("lightmap", a group's name): the image's name
     std::vector<uint32_t> meshes;  // indices into Scene::meshes baked into it
     RgbmImage encoded;
+    // Its shadowmask, 8-bit linear RGBA of encoded's size (lightmap_encoding.h shadowmaskBytes);
+    // empty: none.
+    std::vector<uint8_t> shadowmask;
+
+    ExportedLightmap() = default;
+    ExportedLightmap(std::string name_, std::vector<uint32_t> meshes_, RgbmImage encoded_,
+                     std::vector<uint8_t> shadowmask_ = {})
+        : name(std::move(name_)), meshes(std::move(meshes_)), encoded(std::move(encoded_)),
+          shadowmask(std::move(shadowmask_)) {}
 };
 
 // Writes `path` (atomically) from the glTF file `source` re-read; `meshes` are the scene's
@@ -48,13 +58,19 @@ struct ExportedLightmap {
 // cannot hold, goes into the scene's extras as {"voxlight": {"sky": [r, g, b]}} (radiance,
 // W/(m²·sr)): what `voxlight view` draws where nothing is.
 // Every KHR_lights_punctual light says what the lightmaps hold of it, in the light's
-// VOXLIGHT_light_bake extension {"mode": "all" | "indirect"} (docs/light-bake-modes.md): its
-// own mode as the file gave it, else `lightBake`. `addedLights` (a job file's, in world space)
-// whose mode is indirect become lights at the scene's root: the engine must draw them.
+// VOXLIGHT_light_bake extension {"mode": "all" | "indirect" | "shadowmask", "channel": 0..3}
+// (docs/light-bake-modes.md). `bakedLights`, when given, are the scene's lights as the bake
+// resolved them (resolveLightBake: a file light by Light::sourceLight, then a job file's in
+// the order of `addedLights`): their modes and mask channels are written. Without them, or for
+// a file light no node places: its own mode as the file gave it, else `lightBake` (a
+// shadowmask without a channel written as indirect). `addedLights` (a job file's, in world
+// space) that the engine draws (indirect, shadowmask) become lights at the scene's root.
+// A lightmap's shadowmask becomes a texture that each of its materials points at through
+// VOXLIGHT_shadowmask {"index", "texCoord": 1}.
 void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Source>& meshes,
                          const std::vector<GeneratedLayout>& layouts, const std::vector<ExportedLightmap>& lightmaps,
                          const std::vector<Camera>& addedCameras, const std::string& path, Diagnostics& diagnostics,
                          const vec3& sky = vec3(0.0f), const std::vector<Light>& addedLights = {},
-                         LightBake lightBake = LightBake::All);
+                         LightBake lightBake = LightBake::All, const std::vector<Light>& bakedLights = {});
 
 }  // namespace vl

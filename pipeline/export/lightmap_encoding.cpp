@@ -61,6 +61,23 @@ Image decodeRgbm(const RgbmImage& encoded) {
     return out;
 }
 
+std::vector<uint8_t> shadowmaskBytes(const Image& mask) {
+    if (mask.channels != 4) throw Error("shadowmaskBytes: a shadowmask has 4 channels, this one " + std::to_string(mask.channels));
+    std::vector<uint8_t> bytes(mask.pixels.size());
+    for (size_t k = 0; k < bytes.size(); ++k) {
+        const float v = mask.pixels[k];
+        bytes[k] = static_cast<uint8_t>(std::clamp(std::lround((v > 0.0f ? std::min(v, 1.0f) : 0.0f) * 255.0f), 0L, 255L));
+    }
+    return bytes;
+}
+
+Image decodeShadowmask(int width, int height, const std::vector<uint8_t>& bytes) {
+    Image out(width, height, 4);
+    if (bytes.size() != out.pixels.size()) throw Error("decodeShadowmask: the bytes are not the image's size");
+    for (size_t k = 0; k < bytes.size(); ++k) out.pixels[k] = float(bytes[k]) / 255.0f;
+    return out;
+}
+
 std::vector<uint8_t> rgbmPng(const RgbmImage& encoded) {
     return encodePng8(encoded.width, encoded.height, 4, encoded.rgba);
 }

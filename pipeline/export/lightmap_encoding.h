@@ -35,6 +35,12 @@ Image decodeRgbm(const RgbmImage& encoded);
 // An 8-bit RGBA PNG of the encoded texels, in memory, as stored (no alpha association, no
 // sRGB curve): what a .glb embeds.
 std::vector<uint8_t> rgbmPng(const RgbmImage& encoded);
+// A shadowmask (gather/shadowmask.h: RGBA visibility 0..1) as 8-bit linear RGBA, each channel
+// rounded to the nearest 1/255: what scene.glb and <atlas>_shadowmask.png carry.
+std::vector<uint8_t> shadowmaskBytes(const Image& mask);
+// Those bytes back to 0..1 (4 channels).
+Image decodeShadowmask(int width, int height, const std::vector<uint8_t>& bytes);
+
 // Reads such a PNG back (the range is not in the file: the glTF carries it). InputError
 // naming the path for a file that is not 8-bit RGBA.
 RgbmImage readRgbmPng(const std::string& path, float range);

@@ -3,6 +3,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "gather/bounces.h"
+#include "gather/shadowmask.h"
 #include "gather/texel_gather.h"
 #include "lighting/surface_light.h"
 
@@ -190,9 +191,11 @@ ReceiverLighting ReceiverGather::atlasRows(const LightmapAtlas& given, int rowBe
     Progress progress("lightmap " + atlas.name, last - first, quiet_);
     const TraceSceneView scene = tracing_.traceScene.view();
     const BvhView bvh = tracing_.bvh.view();
-    // A lightmap leaves out the direct light of the lights an engine draws (LightBake::Indirect).
+    // A lightmap leaves out the direct light of the lights an engine draws (LightBake::Indirect,
+    // Shadowmask); a shadowmask light's visibility goes into its own image.
     DirectLightSettings baked = direct_;
     baked.engineDrawnLights = false;
+    Image shadowmask = shadowmaskTexels(receivers, scene, bvh, first, last);
     ReceiverLighting lit;
     if (device_) {
         // The device lights whole atlases; rows outside the band are cleared.
@@ -234,12 +237,14 @@ ReceiverLighting ReceiverGather::atlasRows(const LightmapAtlas& given, int rowBe
         for (size_t k = 0; k < lit.direct.pixels.size(); ++k) lit.direct.pixels[k] += gathered.sky.pixels[k];
         lit.indirect = gathered.indirect;
         lit.open = gathered.open;
+        lit.shadowmask = std::move(shadowmask);
         return lit;  // a lightmap's reflected light (directRadiance, indirectRadiance) is not read
     } else {
         lit = shadeReceivers(receivers, scene, bvh, &mipView_, gathered_, settings_.cone, baked, true, &progress, first,
                              last);
     }
     progress.finish();
+    lit.shadowmask = std::move(shadowmask);
     return lit;
 }
 

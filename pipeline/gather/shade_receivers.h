@@ -26,6 +26,9 @@ struct ReceiverLighting {
     // Lightmap texels only (1 channel): the weight of the element's samples that are not buried
     // (shade_element.h isBuried). Empty: every sample is open.
     Image open;
+    // Lightmap texels only, when some light's bake mode is LightBake::Shadowmask: RGBA, each
+    // such light's visibility in its channel (gather/shadowmask.h). Else empty.
+    Image shadowmask;
 };
 
 // `mips` may be null (no indirect light: direct only). `cache`, when given, holds the

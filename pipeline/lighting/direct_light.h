@@ -355,6 +355,42 @@ VL_HOSTDEV inline vec3 treePointLightsIrradiance(const TraceSceneView& s, const 
 // averages its rays' hits, so one or two lights a hit suffice (docs/many-lights.md).
 constexpr int kHitLightCut = 2;
 
+// How much of a punctual light p sees, 0..1 (a shadowmask's value): a point or spot light by
+// one shadow ray; a sun's disk by the nine points of sunIrradiance, and where they disagree
+// (a penumbra) the share of `strata` × `strata` stratified directions over the disk that are
+// open. A direction under the geometric surface (ng) counts as blocked: the surface shadows
+// itself. Its light's falloff, cone and cosine are not in it: an engine multiplies them in.
+VL_HOSTDEV inline float lightVisibility(const BvhView& bvh, const TraceLight& light, const vec3& p, const vec3& ng,
+                                        int strata, uint64_t seed, uint32_t lightIndex) {
+    const auto open = [&](vec2 disk) {
+        PunctualArrival a;
+        if (light.type == TraceLightType::Directional) {
+            a.wi = light.cosHalfAngle < 1.0f ? coneDirectionAbout(-light.direction, light.cosHalfAngle, disk)
+                                             : -light.direction;
+            a.toInfinity = true;
+        } else {
+            const vec3 d = light.position - p;
+            if (!(glm::dot(d, d) > 0.0f)) return 0.0f;
+            a.wi = glm::normalize(d);
+            a.target = light.position;
+        }
+        if (glm::dot(ng, a.wi) <= 0.0f) return 0.0f;
+        return arrivalBlocked(bvh, a, p, ng) ? 0.0f : 1.0f;
+    };
+    if (light.type != TraceLightType::Directional || !(light.cosHalfAngle < 1.0f)) return open(vec2(0.0f));
+    float seen = 0.0f;
+    for (int k = 0; k < 9; ++k) {
+        const float angle = 2.0f * kPi * float(k) / 8.0f;
+        seen += open(k == 0 ? vec2(0.0f) : 0.99f * vec2(glm::cos(angle), glm::sin(angle)));
+    }
+    if (seen == 9.0f || seen == 0.0f) return seen / 9.0f;
+    float sum = 0.0f;
+    for (int a = 0; a < strata; ++a)
+        for (int b = 0; b < strata; ++b)
+            sum += open(sampleConcentricDisk(jitteredStratum(seed, lightIndex, strata, a, b, 0x4D41534Bu)));  // "MASK"
+    return sum / float(strata * strata);
+}
+
 // Σ over the punctual lights at p, a sun's disk at u ∈ [0, 1)²: each directional light, and
 // each point or spot light or, with their tree, its cut of `budget` (seeded by `seed`).
 VL_HOSTDEV inline vec3 punctualLightsIrradiance(const TraceSceneView& s, const BvhView& bvh, const vec3& p,

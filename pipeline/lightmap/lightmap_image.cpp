@@ -24,6 +24,22 @@ vec3 texel(const Image& image, int x, int y) {
     return image.rgb(x, y);
 }
 
+// Bilinear between texel centres, clamped to the edge, of what `at(x, y)` gives (x, y clamped).
+template <typename At>
+auto bilinear(const Image& texels, vec2 uv, At at) -> decltype(at(0, 0)) {
+    using Value = decltype(at(0, 0));
+    if (texels.empty() || !std::isfinite(uv.x) || !std::isfinite(uv.y)) return Value(0.0f);
+    // Far outside the image every texel clamps to the edge: keep the float → int exact.
+    const float px = std::clamp(uv.x * float(texels.width) - 0.5f, -1.0f, float(texels.width));
+    const float py = std::clamp(uv.y * float(texels.height) - 0.5f, -1.0f, float(texels.height));
+    const float fx0 = std::floor(px), fy0 = std::floor(py);
+    const int x0 = int(fx0), y0 = int(fy0);
+    const float ax = px - fx0, ay = py - fy0;
+    const Value top = glm::mix(at(x0, y0), at(x0 + 1, y0), ax);
+    const Value bottom = glm::mix(at(x0, y0 + 1), at(x0 + 1, y0 + 1), ax);
+    return glm::mix(top, bottom, ay);
+}
+
 }  // namespace
 
 // Its barycentrics in the triangle's plane in double: a sample's position is the mean of several
@@ -46,17 +62,18 @@ vec2 lightmapUvAt(const Mesh& mesh, uint32_t localTriangle, const vec3* corners,
 
 Image shippedLightmapTexels(const Image& total) { return decodeRgbm(encodeRgbm(total)); }
 
+Image shippedShadowmask(const Image& mask) {
+    return mask.empty() ? Image() : decodeShadowmask(mask.width, mask.height, shadowmaskBytes(mask));
+}
+
 vec3 sampleLightmap(const Image& texels, vec2 uv) {
-    if (texels.empty() || !std::isfinite(uv.x) || !std::isfinite(uv.y)) return vec3(0.0f);
-    // Far outside the image every texel clamps to the edge: keep the float → int exact.
-    const float px = std::clamp(uv.x * float(texels.width) - 0.5f, -1.0f, float(texels.width));
-    const float py = std::clamp(uv.y * float(texels.height) - 0.5f, -1.0f, float(texels.height));
-    const float fx0 = std::floor(px), fy0 = std::floor(py);
-    const int x0 = int(fx0), y0 = int(fy0);
-    const float ax = px - fx0, ay = py - fy0;
-    const vec3 top = glm::mix(texel(texels, x0, y0), texel(texels, x0 + 1, y0), ax);
-    const vec3 bottom = glm::mix(texel(texels, x0, y0 + 1), texel(texels, x0 + 1, y0 + 1), ax);
-    return glm::mix(top, bottom, ay);
+    return bilinear(texels, uv, [&](int x, int y) { return texel(texels, x, y); });
+}
+
+float sampleLightmapChannel(const Image& texels, vec2 uv, int channel) {
+    return bilinear(texels, uv, [&](int x, int y) {
+        return texels.at(std::clamp(x, 0, texels.width - 1), std::clamp(y, 0, texels.height - 1), channel);
+    });
 }
 
 Image renderLightmapImage(const CameraReceivers& camera, const TraceScene& trace, const Bvh& bvh,
@@ -74,7 +91,8 @@ Image renderLightmapImage(const CameraReceivers& camera, const TraceScene& trace
 
     const TraceSceneView view = trace.view();
     const BvhView bvhView = bvh.view();
-    std::vector<uint32_t> engineDrawn;  // lights the lightmaps left out: drawn here per read
+    // Lights the lightmaps left out, drawn here per read: exact, or unshadowed times the mask.
+    std::vector<uint32_t> engineDrawn;
     for (uint32_t l = 0; l < view.lightCount; ++l)
         if (view.lights[l].engineDrawn) engineDrawn.push_back(l);
     const int strata = DirectLightSettings{}.emitterStrata;
@@ -94,10 +112,14 @@ Image renderLightmapImage(const CameraReceivers& camera, const TraceScene& trace
                         const SurfaceHit h = surfaceAt(view, hit.triangle, hit.b1, hit.b2);
                         vec3 light(kUnlitLight);
                         const uint32_t m = triangles.meshIndex[hit.triangle];
+                        const Image* shadowmask = nullptr;
+                        vec2 uv(NAN);
                         if (lightmapOf[m] >= 0) {
-                            const vec2 uv = lightmapUvAt(scene.meshes[m], triangles.localIndex[hit.triangle],
-                                                         view.vertices + 3 * size_t(hit.triangle), h.position);
-                            light = sampleLightmap(lightmaps[size_t(lightmapOf[m])].texels, uv);
+                            uv = lightmapUvAt(scene.meshes[m], triangles.localIndex[hit.triangle],
+                                              view.vertices + 3 * size_t(hit.triangle), h.position);
+                            const ShippedLightmap& lightmap = lightmaps[size_t(lightmapOf[m])];
+                            light = sampleLightmap(lightmap.texels, uv);
+                            if (!lightmap.shadowmask.empty()) shadowmask = &lightmap.shadowmask;
                         }
                         if (!engineDrawn.empty()) {
                             // The side the camera sees; the read's own seed, so any thread count
@@ -110,6 +132,12 @@ Image renderLightmapImage(const CameraReceivers& camera, const TraceScene& trace
                             vec3 e(0.0f);
                             for (uint32_t l : engineDrawn) {
                                 const TraceLight& drawn = view.lights[l];
+                                if (drawn.maskChannel >= 0) {
+                                    if (shadowmask)
+                                        e += punctualArrival(drawn, h.position, ng, ns, vec2(0.0f)).irradiance *
+                                             sampleLightmapChannel(*shadowmask, uv, drawn.maskChannel);
+                                    continue;
+                                }
                                 e += drawn.type == TraceLightType::Directional && drawn.cosHalfAngle < 1.0f
                                          ? sunIrradiance(bvhView, drawn, h.position, ng, ns, strata, seed, l)
                                          : punctualLightIrradiance(bvhView, drawn, h.position, ng, ns, vec2(0.0f));

@@ -15,6 +15,7 @@
 #include "trace/camera.h"
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace vl {
@@ -25,11 +26,19 @@ constexpr float kUnlitLight = 0.1f;
 struct ShippedLightmap {
     std::vector<uint32_t> meshes;  // indices into Scene::meshes baked into it
     Image texels;                  // RGB E/π, rows from the top (glTF's v down)
+    Image shadowmask;              // RGBA 0..1 as it ships (8-bit, decoded); empty: none
+
+    ShippedLightmap() = default;
+    ShippedLightmap(std::vector<uint32_t> meshes_, Image texels_, Image shadowmask_ = Image())
+        : meshes(std::move(meshes_)), texels(std::move(texels_)), shadowmask(std::move(shadowmask_)) {}
 };
 
 // A lightmap's total (padding dilated) as scene.glb carries it and the viewer decodes it,
 // texel by texel, before it filters: through 8-bit RGBM and back (export/lightmap_encoding.h).
 Image shippedLightmapTexels(const Image& total);
+// A shadowmask (RGBA 0..1) as scene.glb carries it: through 8-bit and back
+// (export/lightmap_encoding.h shadowmaskBytes). Empty stays empty.
+Image shippedShadowmask(const Image& mask);
 
 // TEXCOORD_1 at `point` on triangle `localTriangle` of `mesh` (`corners`: its world-space
 // corners); NaN where the mesh has no uv1 for it.
@@ -37,6 +46,8 @@ vec2 lightmapUvAt(const Mesh& mesh, uint32_t localTriangle, const vec3* corners,
 
 // The lightmap at TEXCOORD_1 `uv`, bilinear between texel centres, clamped to the edge.
 vec3 sampleLightmap(const Image& texels, vec2 uv);
+// Channel `channel` of an image read as sampleLightmap reads (a shadowmask's light).
+float sampleLightmapChannel(const Image& texels, vec2 uv, int channel);
 
 class TraceScene;
 
@@ -51,7 +62,10 @@ class TraceScene;
 //     kUnlitLight, what the viewer shows there (viewer.js UNLIT_LEVEL);
 //   - plus, for the lights an engine draws (LightBake::Indirect, which the lightmaps leave
 //     out), their exact direct light E/π at the hit: a shadow ray a read (a sun's disk by
-//     lighting/direct_light.h sunIrradiance), as an engine's shadow maps draw them.
+//     lighting/direct_light.h sunIrradiance), as an engine's shadow maps draw them;
+//   - plus, for a LightBake::Shadowmask light, its unshadowed direct light E·cos θ/π at the hit
+//     (a sun from its disk's centre, as an engine's directional light) times its channel of
+//     the hit's lightmap's shadowmask, read as the lightmap is (0 where the mesh has none).
 // So it differs from the bake's own image in where the light comes from (texels, not the
 // receivers' gather) and in its rays: the bake's image shades its 2 × 2 a pixel merged per
 // triangle. The n² reads a pixel are its 1-pixel box, as the Cycles references

@@ -405,8 +405,29 @@ size_t stitchLightmapSeams(const std::vector<LightmapSeam>& seams, const Image& 
     return variables;
 }
 
+namespace {
+
+// The solve takes two RGB images: the mask's channels 0–2 go as the first, channel 3 as the
+// second's red.
+void stitchShadowmask(const std::vector<LightmapSeam>& seams, const Image& mask, Image& shadowmask) {
+    const int width = shadowmask.width, height = shadowmask.height;
+    Image first(width, height, 3), second(width, height, 3), unused(width, height, 3);
+    const size_t texels = size_t(width) * size_t(height);
+    for (size_t t = 0; t < texels; ++t) {
+        for (size_t c = 0; c < 3; ++c) first.pixels[3 * t + c] = shadowmask.pixels[4 * t + c];
+        second.pixels[3 * t] = shadowmask.pixels[4 * t + 3];
+    }
+    stitchLightmapSeams(seams, mask, first, second, unused);
+    for (size_t t = 0; t < texels; ++t) {
+        for (size_t c = 0; c < 3; ++c) shadowmask.pixels[4 * t + c] = std::min(1.0f, first.pixels[3 * t + c]);
+        shadowmask.pixels[4 * t + 3] = std::min(1.0f, second.pixels[3 * t]);
+    }
+}
+
+}  // namespace
+
 LightmapSeamReport finishLightmapSeams(const Scene& scene, const std::vector<uint32_t>& meshes, const Image& mask,
-                                       Image& direct, Image& indirect, Image& total, bool stitch) {
+                                       Image& direct, Image& indirect, Image& total, bool stitch, Image* shadowmask) {
     LightmapSeamReport report;
     const std::vector<LightmapSeam> seams = findLightmapSeams(scene, meshes, mask.width, mask.height);
     const Image before = shippedLightmapTexels(total);
@@ -417,6 +438,7 @@ LightmapSeamReport finishLightmapSeams(const Scene& scene, const std::vector<uin
     report.stitched = stitch;
     if (!stitch || seams.empty()) return report;
     report.texelsMoved = stitchLightmapSeams(seams, mask, direct, indirect, total);
+    if (shadowmask && !shadowmask->empty()) stitchShadowmask(seams, mask, *shadowmask);
     const Image after = shippedLightmapTexels(total);
     report.after = measureSeamJump(seams, after);
     report.afterAtEdge = measureSeamJump(seams, after, 0.0f);

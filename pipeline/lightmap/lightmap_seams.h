@@ -105,9 +105,12 @@ struct LightmapSeamReport {
 };
 
 // An atlas's seams found, measured on its total as it ships, stitched when `stitch` says and
-// measured again: what finishLightmap (bake.h) does after dilation.
+// measured again: what finishLightmap (bake.h) does after dilation. A `shadowmask` (RGBA,
+// gather/shadowmask.h; may be null or empty) is stitched along the same seams by the same
+// solve, and kept within 0..1.
 LightmapSeamReport finishLightmapSeams(const Scene& scene, const std::vector<uint32_t>& meshes, const Image& mask,
-                                       Image& direct, Image& indirect, Image& total, bool stitch);
+                                       Image& direct, Image& indirect, Image& total, bool stitch,
+                                       Image* shadowmask = nullptr);
 
 // The pooled figures of several atlases (each atlas's jumps weighted by its seams' length).
 LightmapSeamReport combineSeamReports(const std::vector<LightmapSeamReport>& reports);

@@ -613,10 +613,10 @@ private:
         light.direction = vec3(glm::normalize(direction));
         if (const auto bake = source.extensions.find("VOXLIGHT_light_bake"); bake != source.extensions.end()) {
             const tinygltf::Value& mode = bake->second.Get("mode");
-            if (!mode.IsString() || (mode.Get<std::string>() != "all" && mode.Get<std::string>() != "indirect"))
-                fail(what + ": VOXLIGHT_light_bake.mode must be \"all\" or \"indirect\"");
-            light.bake = mode.Get<std::string>() == "all" ? LightBake::All : LightBake::Indirect;
+            if (!mode.IsString() || !parseLightBake(mode.Get<std::string>(), light.bake))
+                fail(what + ": VOXLIGHT_light_bake.mode must be \"all\", \"indirect\" or \"shadowmask\"");
         }
+        light.sourceLight = index;
         scene_.lights.push_back(light);
     }
 

@@ -8,6 +8,19 @@
 
 namespace vl {
 
+const char* lightBakeName(LightBake mode) {
+    return mode == LightBake::Indirect ? "indirect" : mode == LightBake::Shadowmask ? "shadowmask" : "all";
+}
+
+bool parseLightBake(const std::string& name, LightBake& mode) {
+    for (LightBake known : {LightBake::All, LightBake::Indirect, LightBake::Shadowmask})
+        if (name == lightBakeName(known)) {
+            mode = known;
+            return true;
+        }
+    return false;
+}
+
 Aabb Scene::bounds() const {
     Aabb box;
     for (const Mesh& mesh : meshes)

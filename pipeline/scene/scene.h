@@ -110,9 +110,18 @@ enum class LightType { Point, Spot, Directional };
 
 // What a punctual light's bake holds (docs/light-bake-modes.md): its direct and indirect light
 // (All), or its indirect light alone (Indirect), the engine drawing its direct light per pixel
-// with its own shadows, sharp at any texel size. Unset: the bake's setting decides
-// (BakeSettings::lightBake).
-enum class LightBake { Unset, All, Indirect };
+// with its own shadows, sharp at any texel size; or its indirect light and, in one channel of
+// the shadowmask, its visibility per texel (Shadowmask), the engine drawing its unshadowed
+// direct light times the mask. Unset: the bake's setting decides (BakeSettings::lightBake).
+enum class LightBake { Unset, All, Indirect, Shadowmask };
+
+// "all", "indirect", "shadowmask" (Unset: "all"), as job files, settings and glTF write them.
+const char* lightBakeName(LightBake mode);
+// The mode a name gives; false for any other text.
+bool parseLightBake(const std::string& name, LightBake& mode);
+
+// A shadowmask image is RGBA: one channel per shadowmask light, four at most (as Unity's).
+constexpr int kShadowmaskChannels = 4;
 
 // glTF punctual intensities are photometric (cd, lx); Blender's exporter multiplies watts
 // per steradian by 683 lm/W, so dividing by it gives back radiometric units (DESIGN.md). The
@@ -134,6 +143,8 @@ struct Light {
     // single direction. glTF has none; a job file's light sets it ("angle", degrees).
     float angularDiameter = 0.0f;
     LightBake bake = LightBake::Unset;
+    int sourceLight = -1;  // its KHR_lights_punctual index; -1: not from the file (a job file's)
+    int maskChannel = -1;  // Shadowmask: its channel of the shadowmask (resolveLightBake); else -1
 
     vec3 radiantIntensity() const { return color * intensity; }
 };

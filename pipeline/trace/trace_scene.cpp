@@ -55,7 +55,8 @@ TraceLight convertLight(const Light& light) {
     out.direction = glm::normalize(light.direction);
     out.range = light.range > 0.0f ? light.range : 0.0f;
     if (light.type == LightType::Directional) out.cosHalfAngle = std::cos(0.5f * light.angularDiameter);
-    out.engineDrawn = light.bake == LightBake::Indirect ? 1u : 0u;
+    out.engineDrawn = light.bake == LightBake::Indirect || light.bake == LightBake::Shadowmask ? 1u : 0u;
+    out.maskChannel = light.bake == LightBake::Shadowmask ? light.maskChannel : -1;
     if (light.type == LightType::Spot) {
         // glTF KHR_lights_punctual's recommended smooth falloff between the cones.
         const float cosOuter = std::cos(light.outerConeAngle);

@@ -60,7 +60,8 @@ struct TraceLight {
     float spotScale = 0.0f;    // glTF smooth spot falloff: t = clamp(cos·scale + offset, 0, 1), factor t²
     float spotOffset = 1.0f;
     float cosHalfAngle = 1.0f;  // directional: its disk's half-angle (scene.h angularDiameter); 1 = a point
-    uint32_t engineDrawn = 0;   // 1: the engine draws its direct light (LightBake::Indirect); lightmaps leave it out
+    uint32_t engineDrawn = 0;   // 1: the engine draws its direct light (LightBake::Indirect, Shadowmask); lightmaps leave it out
+    int32_t maskChannel = -1;   // LightBake::Shadowmask: its channel of the shadowmask (Light::maskChannel)
 };
 
 struct TraceSceneView {

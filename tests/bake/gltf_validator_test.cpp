@@ -66,6 +66,11 @@ TEST_CASE("Every scene.glb the bake writes passes the Khronos glTF validator wit
     sun.bake = LightBake::Indirect;
     sunlit.addedLights = {sun};
     jobs.push_back(sunlit);
+    // The same sun as a shadowmask light: its channel, and each lightmapped material's
+    // VOXLIGHT_shadowmask texture.
+    sun.bake = LightBake::Shadowmask;
+    sunlit.addedLights = {sun};
+    jobs.push_back(sunlit);
     for (size_t j = 0; j < jobs.size(); ++j) {
         jobs[j].outputDir = (fs::path(tempDir("glb-validator")) / ("scene" + std::to_string(j))).string();
         fs::remove_all(jobs[j].outputDir);

@@ -370,3 +370,146 @@ TEST_CASE("A sun the engine draws (light bake indirect): the lightmap leaves its
     // The camera's own image is the whole light in both.
     CHECK(compareImages(drawn.images[0].beauty, all.images[0].beauty).relativeRmse < 1e-6);
 }
+
+namespace {
+
+// The share of a sun's cap (half-angle `halfAngle` about straight up, uniform in solid angle)
+// that a floor point `x` metres beside a roof's straight edge (the roof over x < 0, `height` up)
+// sees: a direction w passes the edge where x + height · w_x / w_y ≥ 0. By a midpoint sum over
+// the cap, 400 × 400 cells in (cos θ, φ), independent of the bake's sampling.
+double visibleCapShare(double x, double height, double halfAngle) {
+    constexpr int kCells = 400;
+    const double cosMax = std::cos(halfAngle);
+    int open = 0;
+    for (int i = 0; i < kCells; ++i) {
+        const double cosTheta = 1.0 - (i + 0.5) / kCells * (1.0 - cosMax);
+        const double sinTheta = std::sqrt(1.0 - cosTheta * cosTheta);
+        for (int j = 0; j < kCells; ++j) {
+            const double phi = 2.0 * kPi * (j + 0.5) / kCells;
+            if (x + height * sinTheta * std::cos(phi) / cosTheta >= 0.0) ++open;
+        }
+    }
+    return double(open) / double(kCells * kCells);
+}
+
+}  // namespace
+
+TEST_CASE("A shadowmask holds a sun's visibility per texel: over a penumbra, the disk's visible share, and the "
+          "lightmap-lit image draws the sun unshadowed times the mask",
+          "[bake]") {
+    // A floor 2 × 2 m (128² lightmap: 1.56 cm texels) under a roof over x < 0, 0.5 m up, and a
+    // sun 20° across straight down: the penumbra runs over |x| < 0.5 · tan 10° = 8.8 cm, about
+    // eleven texels. The mask there is the share of the sun's disk a texel's centre sees
+    // (visibleCapShare); 64 strata over the disk (kShadowmaskStrata) give it to a few 1/64
+    Scene scene;
+    scene.sourcePath = "edge (test)";
+    const float albedo = 0.5f, sunE = 3.0f, height = 0.5f, diameter = 20.0f * kPi / 180.0f;
+    const int floor = addMaterial(scene, vec3(albedo));
+    scene.meshes.push_back(groundQuad("floor", -1.0f, 1.0f, -1.0f, 1.0f, floor));
+    Mesh roof = groundQuad("roof", -2.0f, 0.0f, -2.0f, 2.0f, addMaterial(scene, vec3(albedo)), false);
+    for (vec3& p : roof.positions) p.y = height;
+    scene.meshes.push_back(roof);
+    Light sun;
+    sun.name = "sun";
+    sun.type = LightType::Directional;
+    sun.direction = vec3(0, -1, 0);
+    sun.intensity = sunE;
+    sun.angularDiameter = diameter;
+    scene.lights.push_back(sun);
+    Camera camera = cameraLookingDown(vec3(0.0f, 0.3f, 0.0f));
+    camera.name = "down";
+    scene.cameras.push_back(camera);
+
+    BakeSettings settings;
+    settings.quiet = true;
+    settings.generateLightmapUvs = false;
+    settings.outputs.grids = settings.outputs.gltf = false;
+    const int N = 128;
+    settings.lightmap.width = settings.lightmap.height = N;
+    settings.imageWidth = settings.imageHeight = 64;
+    const auto bakeIn = [&](LightBake mode) {
+        settings.lightBake = mode;
+        Diagnostics diagnostics(false, false);
+        return bake(scene, settings, diagnostics);
+    };
+    const BakeResult masked = bakeIn(LightBake::Shadowmask), drawn = bakeIn(LightBake::Indirect);
+    REQUIRE(masked.lightmaps.size() == 1);
+    const BakedLightmap& lightmap = masked.lightmaps[0];
+    REQUIRE(lightmap.shadowmask.channels == kShadowmaskChannels);
+    REQUIRE(lightmap.shadowmask.width == N);
+    CHECK(drawn.lightmaps[0].shadowmask.empty());
+
+    // The lightmap holds none of the sun's direct light, as in indirect mode.
+    for (float v : lightmap.direct.pixels) CHECK(v == 0.0f);
+
+    // Row N/2 (z = 1/N), texel i at x = 2(i + ½)/N − 1.
+    const double halfAngle = 0.5 * diameter, penumbra = height * std::tan(halfAngle);
+    double maskSum = 0.0, shareSum = 0.0, worst = 0.0;
+    int inPenumbra = 0;
+    for (int i = 0; i < N; ++i) {
+        const double x = 2.0 * (i + 0.5) / N - 1.0;
+        const double share = visibleCapShare(x, height, halfAngle);
+        const float mask = lightmap.shadowmask.at(i, N / 2, 0);
+        if (std::abs(x) > penumbra + 0.02) {  // beyond the penumbra: wholly seen or wholly hidden
+            CHECK(mask == (x > 0.0 ? 1.0f : 0.0f));
+            continue;
+        }
+        if (std::abs(x) >= penumbra) continue;
+        ++inPenumbra;
+        maskSum += mask;
+        shareSum += share;
+        worst = std::max(worst, std::abs(double(mask) - share));
+    }
+    // The other channels hold no light.
+    for (size_t t = 0; t < size_t(N) * N; ++t)
+        for (int c = 1; c < kShadowmaskChannels; ++c) CHECK(lightmap.shadowmask.pixels[4 * t + size_t(c)] == 0.0f);
+    REQUIRE(inPenumbra >= 10);
+    CHECK(maskSum / inPenumbra == Approx(shareSum / inPenumbra).margin(0.01));
+    CHECK(worst < 0.05);
+
+    // The lightmap-lit view: the sun unshadowed times the bilinear mask, against the same view
+    // with the sun drawn exact per read (indirect mode, 16 stratified directions a read in the
+    // penumbra: a few percent of noise a pixel). The edge runs along the image's columns, so
+    // each column's mean over 48 rows takes that noise down: they must hold the same light
+    // within 2% of the sunlit level, the penumbra included (its ramp spans eleven texels).
+    const double lit = albedo * sunE / kPi;
+    double worstColumn = 0.0;
+    for (int x = 0; x < 64; ++x) {
+        double difference = 0.0;
+        for (int y = 8; y < 56; ++y)
+            difference += double(masked.images[0].lightmapped.at(x, y, 1)) - double(drawn.images[0].lightmapped.at(x, y, 1));
+        worstColumn = std::max(worstColumn, std::abs(difference / 48.0) / lit);
+    }
+    CHECK(worstColumn < 0.02);
+}
+
+TEST_CASE("A fifth shadowmask light, or one glTF light placed twice as a shadowmask light, is refused by name",
+          "[bake]") {
+    Scene scene;
+    scene.sourcePath = "lamps.gltf";
+    for (int k = 0; k < 5; ++k) {
+        Light lamp;
+        lamp.name = "lamp" + std::to_string(k);
+        lamp.bake = LightBake::Shadowmask;
+        lamp.sourceLight = k;
+        scene.lights.push_back(lamp);
+    }
+    Scene four = scene;
+    four.lights.pop_back();
+    resolveLightBake(four, LightBake::All);
+    for (int k = 0; k < 4; ++k) CHECK(four.lights[size_t(k)].maskChannel == k);
+    CHECK_THROWS_WITH(resolveLightBake(scene, LightBake::All),
+                      Catch::Contains("lamps.gltf") && Catch::Contains("light 'lamp4' is a fifth shadowmask light") &&
+                          Catch::Contains("'lamp0', 'lamp1', 'lamp2', 'lamp3'"));
+    // The setting makes every light without a mode of its own a shadowmask light.
+    Scene bySetting = four;
+    for (Light& light : bySetting.lights) light.bake = LightBake::Unset;
+    bySetting.lights[0].bake = LightBake::All;
+    resolveLightBake(bySetting, LightBake::Shadowmask);
+    CHECK(bySetting.lights[0].maskChannel == -1);
+    CHECK(bySetting.lights[3].maskChannel == 2);
+    Scene twice = four;
+    twice.lights[1].sourceLight = 0;
+    CHECK_THROWS_WITH(resolveLightBake(twice, LightBake::All),
+                      Catch::Contains("light 'lamp1' (KHR_lights_punctual light 0) is placed by several nodes"));
+}

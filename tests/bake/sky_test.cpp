@@ -307,11 +307,19 @@ TEST_CASE("A light's bake mode: a job file's light gives its own, the light-bake
     CHECK(scene.lights[1].bake == LightBake::Indirect);
     CHECK(scene.lights[2].bake == LightBake::Indirect);
 
+    std::ofstream(dir / "masked.json") << R"({"scenes": [{"path": "a.gltf", "lights": [
+        {"type": "directional", "direction": [0, -1, 0], "bake": "shadowmask"}]}]})";
+    const std::vector<BakeJob> masked = readJobFile((dir / "masked.json").string(), BakeSettings{}, "output");
+    CHECK(masked.at(0).addedLights.at(0).bake == LightBake::Shadowmask);
+    BakeSettings maskSetting;
+    applySetting(bakeSettingsTable(), maskSetting, "light-bake", "shadowmask");
+    CHECK(maskSetting.lightBake == LightBake::Shadowmask);
+
     std::ofstream(dir / "bad.json") << R"({"scenes": [{"path": "a.gltf", "lights": [
         {"type": "point", "position": [0, 1, 0], "bake": "shadow"}]}]})";
     CHECK_THROWS_WITH(readJobFile((dir / "bad.json").string(), BakeSettings{}, "output"),
                       Catch::Contains("bad.json") && Catch::Contains("lights[0].bake") && Catch::Contains("\"shadow\""));
     BakeSettings settings;
     CHECK_THROWS_WITH(applySetting(bakeSettingsTable(), settings, "light-bake", "none"),
-                      Catch::Contains("light-bake") && Catch::Contains("'none'") && Catch::Contains("all, indirect"));
+                      Catch::Contains("light-bake") && Catch::Contains("'none'") && Catch::Contains("all, indirect, shadowmask"));
 }

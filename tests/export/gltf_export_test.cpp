@@ -194,3 +194,76 @@ TEST_CASE("A glTF light's bake mode other than all or indirect is refused naming
     CHECK_THROWS_WITH(loadGltf(dir + "/bad.gltf"), Catch::Contains("bad.gltf") && Catch::Contains("'lamp'") &&
                                                         Catch::Contains("VOXLIGHT_light_bake.mode"));
 }
+
+TEST_CASE("glTF out writes shadowmask lights with their channels and points each lightmapped material at its "
+          "shadowmask",
+          "[export]") {
+    // The point-lit box's own light and a job file's sun, both shadowmask lights as the bake
+    // resolved them (channels 0 and 1); one lightmap over every mesh, with a shadowmask.
+    const std::string source = test::sourceDir() + "/scenes/cornell_box_point.gltf";
+    Scene scene = loadGltf(source);
+    REQUIRE(scene.lights.size() == 1);
+    CHECK(scene.lights[0].sourceLight == 0);
+    std::vector<Mesh::Source> sources;
+    std::vector<uint32_t> all;
+    for (const Mesh& mesh : scene.meshes) {
+        sources.push_back(mesh.source);
+        all.push_back(uint32_t(all.size()));
+    }
+    Light sun;
+    sun.name = "sun";
+    sun.type = LightType::Directional;
+    sun.intensity = 15.0f;
+    scene.lights.push_back(sun);
+    for (Light& light : scene.lights) light.bake = LightBake::Shadowmask;
+    scene.lights[0].maskChannel = 0;
+    scene.lights[1].maskChannel = 1;
+    ExportedLightmap lightmap = grey("lightmap", all, 1.0f);
+    Image mask(8, 8, kShadowmaskChannels, 0.0f);
+    for (size_t t = 0; t < 64; ++t) mask.pixels[4 * t] = float(t) / 63.0f;
+    lightmap.shadowmask = shadowmaskBytes(mask);
+    const std::string out = test::tempDir("gltf-out-shadowmask") + "/box.glb";
+    Diagnostics diagnostics(false, false);
+    writeLightmappedGlb(source, sources, {}, {lightmap}, {}, out, diagnostics, vec3(0.0f), {sun}, LightBake::All,
+                        scene.lights);
+
+    const tinygltf::Model after = reread(out);
+    REQUIRE(after.lights.size() == 2);
+    for (int k = 0; k < 2; ++k) {
+        const tinygltf::Value& bake = after.lights[size_t(k)].extensions.at("VOXLIGHT_light_bake");
+        CHECK(bake.Get("mode").Get<std::string>() == "shadowmask");
+        CHECK(bake.Get("channel").Get<int>() == k);
+    }
+    CHECK(std::count(after.extensionsUsed.begin(), after.extensionsUsed.end(), "VOXLIGHT_shadowmask") == 1);
+    int masked = 0;
+    for (const tinygltf::Material& material : after.materials) {
+        const auto it = material.extensions.find("VOXLIGHT_shadowmask");
+        if (it == material.extensions.end()) continue;
+        ++masked;
+        REQUIRE(lightmapOf(material));
+        CHECK(it->second.Get("texCoord").Get<int>() == 1);
+        const int texture = it->second.Get("index").Get<int>();
+        REQUIRE(texture >= 0);
+        REQUIRE(size_t(texture) < after.textures.size());
+        CHECK(texture != lightmapOf(material)->Get("index").Get<int>());
+        CHECK(after.images.at(size_t(after.textures[size_t(texture)].source)).name == "lightmap shadowmask");
+    }
+    CHECK(masked > 0);
+    // Read back, the light keeps its mode.
+    const Scene reloaded = loadGltf(out);
+    REQUIRE(reloaded.lights.size() == 2);
+    for (const Light& light : reloaded.lights) CHECK(light.bake == LightBake::Shadowmask);
+}
+
+TEST_CASE("A shadowmask ships as 8-bit linear bytes, each within half a step of its value", "[export]") {
+    Image mask(3, 1, kShadowmaskChannels, 0.0f);
+    const float values[] = {0.0f, 1.0f, 0.5f, 0.25f, 1.5f, -0.5f, 0.1f, 0.9f, 0.002f, 0.998f, 0.3333f, 0.6667f};
+    std::copy(std::begin(values), std::end(values), mask.pixels.begin());
+    const std::vector<uint8_t> bytes = shadowmaskBytes(mask);
+    const Image back = decodeShadowmask(3, 1, bytes);
+    for (size_t k = 0; k < 12; ++k)
+        CHECK(back.pixels[k] == Approx(std::clamp(values[k], 0.0f, 1.0f)).margin(0.5 / 255.0 + 1e-6));
+    CHECK(bytes[4] == 255);  // 1.5 clamps to 1
+    CHECK(bytes[5] == 0);    // −0.5 to 0
+    CHECK_THROWS(shadowmaskBytes(Image(2, 2, 3)));
+}

@@ -129,19 +129,22 @@ int main(int argc, char** argv) {
             Image shaded;  // direct + indirect as shaded, before dilation and seam stitching
             Image shadedDirect;
             std::vector<uint32_t> meshes;
+            Image shippedMask;  // its shadowmask as it ships (shadowmask lights); empty: none
         };
         std::vector<Baked> baked;
         std::vector<int> atlasOf(scene.meshes.size(), -1);
         for (LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics)) {
             const ReceiverLighting lit = gather.atlasRows(atlas, 0, atlas.receivers.height);
-            const BakedLightmap lightmap = finishLightmap(atlas, lit.direct, lit.indirect, lit.open, scene, job.settings);
+            const BakedLightmap lightmap =
+                finishLightmap(atlas, lit.direct, lit.indirect, lit.open, scene, job.settings, lit.shadowmask);
             if (job.settings.lightmapSide == LightmapSide::Inside)
                 orientLightmapSamples(atlas.receivers, tracing.bvh.view(), tracing.traceScene.view(), tracing.viewpoints);
             for (uint32_t m : lightmap.meshes)
                 if (!scene.meshes[m].uv1.empty()) atlasOf[m] = int(baked.size());
             Image shaded = lit.direct;
             for (size_t k = 0; k < shaded.pixels.size(); ++k) shaded.pixels[k] += lit.indirect.pixels[k];
-            baked.push_back({std::move(atlas), shippedLightmapTexels(lightmap.total), std::move(shaded), lit.direct, lightmap.meshes});
+            baked.push_back({std::move(atlas), shippedLightmapTexels(lightmap.total), std::move(shaded), lit.direct,
+                             lightmap.meshes, shippedShadowmask(lightmap.shadowmask)});
         }
         const Camera camera = bakeCameras(scene, job.settings).front();
         const CameraReceivers receivers = bakeCameraReceivers(
@@ -272,7 +275,7 @@ int main(int argc, char** argv) {
                     Image texels = readImage(givenTexels[a]);
                     if (texels.width != b.shipped.width || texels.height != b.shipped.height)
                         throw SettingsError(givenTexels[a] + ": not the size of atlas '" + b.atlas.name + "'");
-                    truths.push_back({b.meshes, std::move(texels)});
+                    truths.push_back({b.meshes, std::move(texels), b.shippedMask});
                     continue;
                 }
                 PathTracerSettings traceSettings;
@@ -316,7 +319,8 @@ int main(int argc, char** argv) {
                 }
                 const BakedLightmap truth =
                     finishLightmap(b.atlas, traced.direct, traced.indirect, openWeight, scene, job.settings);
-                truths.push_back({b.meshes, shippedLightmapTexels(truth.total)});
+                // Shadowmask lights: the bake's own mask, each texel's exact visibility.
+                truths.push_back({b.meshes, shippedLightmapTexels(truth.total), b.shippedMask});
                 writeExr(truths.back().texels, stem + "_texels_" + b.atlas.name + ".exr");
             }
             writeExr(bakeLightmapImage(tracing.traceScene, tracing.bvh,

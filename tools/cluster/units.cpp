@@ -273,6 +273,7 @@ UnitRecord runReceiverUnit(const BakeJob& job, const std::string& sceneWork, con
             file.add(rows(lit.direct, rowBegin, rowEnd));
             file.add(rows(lit.indirect, rowBegin, rowEnd));
             file.add(lit.open.pixels.empty() ? std::vector<float>() : rows(lit.open, rowBegin, rowEnd));
+            file.add(lit.shadowmask.empty() ? std::vector<float>() : rows(lit.shadowmask, rowBegin, rowEnd));
             writeUnitFile(file, (dir / kBandFile).string());
         } else {
             const std::vector<Camera> cameras = bakeCameras(scene, settings);
@@ -334,7 +335,9 @@ BakeReport mergeScene(const BakeJob& job, const std::string& sceneWork, const Sc
                 Image direct(atlas.receivers.width, atlas.receivers.height, 3);
                 Image indirect = direct;
                 Image open(atlas.receivers.width, atlas.receivers.height, 1);
+                Image shadowmask(atlas.receivers.width, atlas.receivers.height, kShadowmaskChannels);
                 bool anyOpen = false;  // the bands say which of their samples are buried
+                bool anyMask = false;  // and whether some light has a shadowmask
                 for (int band = 0; band < units.atlases[a].bands; ++band, ++receiver) {
                     const std::string path = (fs::path(sceneWork) / receiverFolder(units, receiver) / kBandFile).string();
                     const UnitFile file = readUnitFile(path);
@@ -347,16 +350,20 @@ BakeReport mergeScene(const BakeJob& job, const std::string& sceneWork, const Sc
                     const size_t offset = size_t(rowBegin) * size_t(atlas.receivers.width) * 3;
                     const size_t floats = size_t(rowEnd - rowBegin) * size_t(atlas.receivers.width) * 3;
                     const std::vector<float> d = file.take<float>(0, path), i = file.take<float>(1, path),
-                                             o = file.take<float>(2, path);
-                    if (d.size() != floats || i.size() != floats || (!o.empty() && o.size() != floats / 3))
+                                             o = file.take<float>(2, path), s = file.take<float>(3, path);
+                    if (d.size() != floats || i.size() != floats || (!o.empty() && o.size() != floats / 3) ||
+                        (!s.empty() && s.size() != floats / 3 * size_t(kShadowmaskChannels)))
                         throw InputError(path + ": a band of the wrong size");
+                    std::copy(s.begin(), s.end(), shadowmask.pixels.begin() + long(offset / 3 * size_t(kShadowmaskChannels)));
+                    anyMask = anyMask || !s.empty();
                     std::copy(d.begin(), d.end(), direct.pixels.begin() + long(offset));
                     std::copy(i.begin(), i.end(), indirect.pixels.begin() + long(offset));
                     std::copy(o.begin(), o.end(), open.pixels.begin() + long(offset / 3));
                     anyOpen = anyOpen || !o.empty();
                     lightmapSeconds += records[size_t(receiver) + 1].seconds;
                 }
-                result.lightmaps.push_back(finishLightmap(atlas, direct, indirect, anyOpen ? open : Image(), scene, job.settings));
+                result.lightmaps.push_back(finishLightmap(atlas, direct, indirect, anyOpen ? open : Image(), scene,
+                                                          job.settings, anyMask ? shadowmask : Image()));
             }
         }
         for (int c = 0; c < units.cameras; ++c) {

@@ -12,12 +12,15 @@
 // and the browser test use it. ?capture=page runs the page as usual and POSTs /ready once it
 // has drawn, for the browser's own screenshot of it (`--screenshot --whole-page`).
 // ?material=three draws with three.js' materials instead (moz_lightmap.js, for one's own scene).
+// A light whose bake mode is "shadowmask" is drawn as an engine draws it (shadowmask.js): its
+// unshadowed direct light times its channel of the material's shadowmask, added to the lightmap.
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { PointerLockControls } from 'three/addons/controls/PointerLockControls.js';
 import { VRButton } from 'three/addons/webxr/VRButton.js';
 import { applyMozLightmaps } from './moz_lightmap.js';
+import { shadowmaskLights, shadowmaskUniforms, SHADOWMASK_GLSL } from './shadowmask.js';
 
 const params = new URLSearchParams(location.search);
 const capturing = params.get('capture') === '';         // the canvas alone, posted to /capture
@@ -53,6 +56,14 @@ out vec4 vColor;
 out vec2 vBaseUv;
 out vec2 vEmissiveUv;
 out vec2 vLightmapUv;
+#ifdef HAS_SHADOWMASK
+uniform mat4 modelMatrix;
+#ifdef HAS_NORMAL
+in vec3 normal;
+#endif
+out vec3 vWorldPosition;
+out vec3 vWorldNormal;
+#endif
 
 vec2 channel(int which) {
   vec2 t = vec2(0.0);
@@ -78,6 +89,18 @@ void main() {
   p = instanceMatrix * p;
 #endif
   gl_Position = projectionMatrix * modelViewMatrix * p;
+#ifdef HAS_SHADOWMASK
+  mat4 toWorld = modelMatrix;
+#ifdef USE_INSTANCING
+  toWorld = modelMatrix * instanceMatrix;
+#endif
+  vWorldPosition = (toWorld * vec4(position, 1.0)).xyz;
+#ifdef HAS_NORMAL
+  vWorldNormal = transpose(inverse(mat3(toWorld))) * normal;
+#else
+  vWorldNormal = vec3(0.0);  // flat: the fragment takes its geometric normal
+#endif
+#endif
 }
 `;
 
@@ -98,6 +121,12 @@ in vec2 vEmissiveUv;
 in vec2 vLightmapUv;
 #ifdef HAS_COLOR
 in vec4 vColor;
+#endif
+#ifdef HAS_SHADOWMASK
+uniform vec3 cameraPosition;
+in vec3 vWorldPosition;
+in vec3 vWorldNormal;
+${SHADOWMASK_GLSL}
 #endif
 out vec4 fragColor;
 
@@ -140,6 +169,13 @@ void main() {
 #endif
 #ifdef HAS_LIGHTMAP
   vec3 light = lightmapAt(vLightmapUv);
+#ifdef HAS_SHADOWMASK
+  // The side the camera sees, as the bake's lightmap-lit image takes it.
+  vec3 ng = normalize(cross(dFdx(vWorldPosition), dFdy(vWorldPosition)));
+  if (dot(ng, cameraPosition - vWorldPosition) < 0.0) ng = -ng;
+  vec3 ns = dot(vWorldNormal, vWorldNormal) > 0.0 ? normalize(vWorldNormal) * (gl_FrontFacing ? 1.0 : -1.0) : ng;
+  light += shadowmaskLight(vWorldPosition, ng, ns, vLightmapUv);
+#endif
 #else
   vec3 light = vec3(${UNLIT_LEVEL.toFixed(3)});
 #endif
@@ -162,7 +198,7 @@ function textureMatrix(texture) {
 }
 
 // One material per (glTF material, attributes the geometry has): the shader reads only what exists.
-function bakedMaterial(source, geometry, lightmap, shared, instanced) {
+function bakedMaterial(source, geometry, lightmap, shared, instanced, maskLights) {
   const color = geometry.getAttribute('color');
   const defines = {
     BASE_CHANNEL: source.map ? source.map.channel : 0,
@@ -179,6 +215,9 @@ function bakedMaterial(source, geometry, lightmap, shared, instanced) {
   if (source.map) defines.HAS_BASE_MAP = '';
   if (source.emissiveMap) defines.HAS_EMISSIVE_MAP = '';
   if (lightmap) defines.HAS_LIGHTMAP = '';
+  const masked = lightmap && lightmap.shadowmask && maskLights.length > 0;
+  if (masked) defines.HAS_SHADOWMASK = '';
+  if (geometry.getAttribute('normal')) defines.HAS_NORMAL = '';
   if (source.alphaTest > 0) defines.ALPHA_MASK = '';
   if (source.transparent) defines.ALPHA_BLEND = '';
   if (instanced) defines.USE_INSTANCING = '';
@@ -204,19 +243,15 @@ function bakedMaterial(source, geometry, lightmap, shared, instanced) {
       alphaCutoff: { value: source.alphaTest },
       mode: shared.mode,
       exposure: shared.exposure,
+      ...(masked ? shadowmaskUniforms(maskLights, lightmap.shadowmask) : {}),
     },
   });
 }
 
-// MOZ_lightmap of the glTF material behind a three.js material: its texture, decoded as data.
-async function lightmapOf(parser, material, cache) {
-  const association = parser.associations.get(material);
-  if (!association || association.materials === undefined) return null;
-  const definition = parser.json.materials[association.materials];
-  const extension = definition.extensions && definition.extensions.MOZ_lightmap;
-  if (!extension) return null;
-  if (!cache.has(extension.index)) {
-    cache.set(extension.index, parser.getDependency('texture', extension.index).then((texture) => {
+// A texture of the glTF file as data: texel values as stored, filtered in the shader.
+function dataTexture(parser, index, cache) {
+  if (!cache.has(index)) {
+    cache.set(index, parser.getDependency('texture', index).then((texture) => {
       const data = texture.clone();  // the same image may serve as a colour map elsewhere
       data.colorSpace = THREE.NoColorSpace;
       data.flipY = false;
@@ -226,8 +261,21 @@ async function lightmapOf(parser, material, cache) {
       return data;
     }));
   }
-  const texture = await cache.get(extension.index);
-  return { texture, range: extension.intensity ?? 1, channel: extension.texCoord ?? 0 };
+  return cache.get(index);
+}
+
+// MOZ_lightmap of the glTF material behind a three.js material: its texture, decoded as data;
+// with its VOXLIGHT_shadowmask's texture, when it has one.
+async function lightmapOf(parser, material, cache) {
+  const association = parser.associations.get(material);
+  if (!association || association.materials === undefined) return null;
+  const definition = parser.json.materials[association.materials];
+  const extension = definition.extensions && definition.extensions.MOZ_lightmap;
+  if (!extension) return null;
+  const texture = await dataTexture(parser, extension.index, cache);
+  const mask = definition.extensions.VOXLIGHT_shadowmask;
+  const shadowmask = mask ? await dataTexture(parser, mask.index, cache) : null;
+  return { texture, range: extension.intensity ?? 1, channel: extension.texCoord ?? 0, shadowmask };
 }
 
 async function applyBakedMaterials(gltf, shared) {
@@ -235,6 +283,7 @@ async function applyBakedMaterials(gltf, shared) {
   gltf.scene.traverse((object) => { if (object.isMesh) meshes.push(object); });
   const textures = new Map();
   const made = new Map();
+  const maskLights = shadowmaskLights(gltf);
   let unlit = 0;
   for (const mesh of meshes) {
     const sources = Array.isArray(mesh.material) ? mesh.material : [mesh.material];
@@ -244,9 +293,9 @@ async function applyBakedMaterials(gltf, shared) {
       const emits = source.emissive && source.emissive.r + source.emissive.g + source.emissive.b > 0;
       if (!lightmap && !emits) ++unlit;  // an emitter shows its emission, lightmap or not
       const geometry = mesh.geometry;
-      const key = [source.uuid, !!geometry.getAttribute('uv'), !!geometry.getAttribute('uv1'),
+      const key = [source.uuid, !!geometry.getAttribute('uv'), !!geometry.getAttribute('uv1'), !!geometry.getAttribute('normal'),
                    geometry.getAttribute('color') ? geometry.getAttribute('color').itemSize : 0, !!mesh.isInstancedMesh].join();
-      if (!made.has(key)) made.set(key, bakedMaterial(source, geometry, lightmap, shared, !!mesh.isInstancedMesh));
+      if (!made.has(key)) made.set(key, bakedMaterial(source, geometry, lightmap, shared, !!mesh.isInstancedMesh, maskLights));
       replaced.push(made.get(key));
     }
     mesh.material = Array.isArray(mesh.material) ? replaced : replaced[0];
@@ -320,8 +369,9 @@ async function main() {
   if (threeMaterials) renderer.outputColorSpace = THREE.SRGBColorSpace;
   const counts = threeMaterials ? { meshes: await applyMozLightmaps(gltf), unlit: 0 } : await applyBakedMaterials(gltf, shared);
   const world = gltf.scene;
-  // Lights whose direct light the bake left to the engine (VOXLIGHT_light_bake "indirect",
-  // docs/light-bake-modes.md): this page does not draw them yet, so say what is missing.
+  // Lights whose direct light the bake left to the engine's shadow maps (VOXLIGHT_light_bake
+  // "indirect", docs/light-bake-modes.md): this page does not draw them yet, so say what is
+  // missing. (Shadowmask lights it draws, above.)
   const drawnByEngine = (gltf.parser.json.extensions?.KHR_lights_punctual?.lights ?? [])
     .filter((light) => light.extensions?.VOXLIGHT_light_bake?.mode === 'indirect')
     .map((light, i) => light.name || `light ${i}`);

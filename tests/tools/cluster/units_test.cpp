@@ -13,6 +13,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -104,7 +105,7 @@ TEST_CASE("A scene whose lightmaps have no mesh to bake merges as its local bake
     test::checkSameOutputs(root / "local", root / "split", local.files);
 }
 
-TEST_CASE("A lightmap whose seams are stitched merges as its local bake", "[cluster]") {
+TEST_CASE("A lightmap whose seams are stitched merges as its local bake, its shadowmask too", "[cluster]") {
     // A 2 × 2 m floor split at x = 1 into two charts of a 32² lightmap, the second turned a
     // quarter and coarser (as bake/lightmap_seams_test.cpp's), under a point light: its seam is
     // stitched after the bands are put together, as the local bake stitches it.
@@ -126,32 +127,42 @@ TEST_CASE("A lightmap whose seams are stitched merges as its local bake", "[clus
         "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 30}]}},
         "scene": 0, "scenes": [{"nodes": [0, 1]}],
         "nodes": [{"mesh": 0}, {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0.7, 1.2, 0.9]}])";
-    BakeJob job;
-    job.scenePath = b.writeGltf(root.string(), "split_floor", members);
-    job.settings.quiet = true;
-    job.settings.voxel.resolution = 16;
-    job.settings.lightmap.width = job.settings.lightmap.height = 32;
-    job.outputDir = (root / "local").string();
-    const BakeReport local = runBake(job);
-    INFO(local.error);
-    REQUIRE(local.ok);
-    REQUIRE(local.lightmapSeams);
-    CHECK(local.lightmapSeams->after.edges == 1);
-    CHECK(local.lightmapSeams->stitched);
-    CHECK(local.lightmapSeams->texelsMoved > 0);
-    CHECK(local.lightmapSeams->afterAtEdge.meanRelative < local.lightmapSeams->beforeAtEdge.meanRelative);
+    const std::string scene = b.writeGltf(root.string(), "split_floor", members);
+    // Baked whole, and with the light in shadowmask mode: its mask's bands are put together,
+    // dilated and stitched as the local bake's.
+    for (const LightBake mode : {LightBake::All, LightBake::Shadowmask}) {
+        const fs::path dir = root / lightBakeName(mode);
+        BakeJob job;
+        job.scenePath = scene;
+        job.settings.quiet = true;
+        job.settings.voxel.resolution = 16;
+        job.settings.lightmap.width = job.settings.lightmap.height = 32;
+        job.settings.lightBake = mode;
+        job.outputDir = (dir / "local").string();
+        const BakeReport local = runBake(job);
+        INFO(lightBakeName(mode) << ": " << local.error);
+        REQUIRE(local.ok);
+        REQUIRE(local.lightmapSeams);
+        CHECK(local.lightmapSeams->after.edges == 1);
+        CHECK(local.lightmapSeams->stitched);
+        CHECK(local.lightmapSeams->texelsMoved > 0);
+        if (mode == LightBake::All)
+            CHECK(local.lightmapSeams->afterAtEdge.meanRelative < local.lightmapSeams->beforeAtEdge.meanRelative);
+        const bool masked = std::count(local.files.begin(), local.files.end(), "lightmap_shadowmask.png") == 1;
+        CHECK(masked == (mode == LightBake::Shadowmask));
 
-    job.outputDir = (root / "split").string();
-    const std::string work = (root / "work").string();
-    const SceneUnits units = planSceneUnits(job, 3);
-    REQUIRE(units.atlases.size() == 1);
-    REQUIRE(runVoxelUnit(job, work).ok);
-    for (int r = 0; r < units.receiverCount(); ++r) REQUIRE(runReceiverUnit(job, work, units, r).ok);
-    const BakeReport merged = mergeScene(job, work, units);
-    INFO(merged.error);
-    REQUIRE(merged.ok);
-    CHECK(merged.files == local.files);
-    test::checkSameOutputs(root / "local", root / "split", local.files);
+        job.outputDir = (dir / "split").string();
+        const std::string work = (dir / "work").string();
+        const SceneUnits units = planSceneUnits(job, 3);
+        REQUIRE(units.atlases.size() == 1);
+        REQUIRE(runVoxelUnit(job, work).ok);
+        for (int r = 0; r < units.receiverCount(); ++r) REQUIRE(runReceiverUnit(job, work, units, r).ok);
+        const BakeReport merged = mergeScene(job, work, units);
+        INFO(merged.error);
+        REQUIRE(merged.ok);
+        CHECK(merged.files == local.files);
+        test::checkSameOutputs(dir / "local", dir / "split", local.files);
+    }
 }
 
 TEST_CASE("A failed unit fails its scene's merge with its error, and the output folder is left alone", "[cluster]") {

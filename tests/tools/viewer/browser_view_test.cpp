@@ -139,6 +139,38 @@ CodeDifference codeDifference(const std::vector<int>& a, const std::vector<int>&
     return d;
 }
 
+// The page of `<out>/box` captured at 128 × 128 (its first camera, lit, exposure 0) against the
+// bake's image_lightmapped.png, over the pixels away from edges (more than half of them): within
+// kCodeTolerance codes everywhere, a mean difference under a quarter of a code.
+struct PageAgainstImage {
+    std::vector<int> page;
+    Image lit;   // image_lightmapped.exr
+    Image mask;  // the pixels compared
+};
+PageAgainstImage capturePageAgainstLightmapped(const fs::path& out, const fs::path& baked) {
+    BrowserCapture shot;
+    shot.scene = "box";
+    shot.width = shot.height = 128;
+    capturePage(out, shot, "canvas_lit.png");
+    int width = 0, height = 0;
+    PageAgainstImage compared;
+    compared.page = pngCodes((out / "canvas_lit.png").string(), width, height);
+    REQUIRE(width == 128);
+    REQUIRE(height == 128);
+    const std::vector<int> expected = pngCodes((baked / "image_lightmapped.png").string(), width, height);
+    compared.lit = readImage((baked / "image_lightmapped.exr").string());
+    compared.mask = awayFromEdges(readImage((baked / "image_albedo.exr").string()), compared.lit, 0.15f);
+    INFO("pixels compared: " << coveredFraction(compared.mask));
+    CHECK(coveredFraction(compared.mask) > 0.5);
+    const CodeDifference difference = codeDifference(compared.page, expected, compared.mask);
+    INFO("page against image_lightmapped.png: " << 100.0 * difference.within << "% of pixels within "
+                                                << kCodeTolerance << " codes, mean " << difference.mean << ", worst "
+                                                << difference.worst);
+    CHECK(difference.worst <= kCodeTolerance);
+    CHECK(difference.mean < 0.25);
+    return compared;
+}
+
 #define VL_SKIP_WITHOUT_CHROMIUM()                                                                      \
     do {                                                                                                \
         if (findChromium().empty())                                                                     \
@@ -270,25 +302,11 @@ TEST_CASE("The viewer page in Chromium shows the bake's lightmap-lit image, code
     const fs::path baked = out / "box";
     REQUIRE(fs::exists(baked / "walls.exr"));
 
-    BrowserCapture shot;
-    shot.scene = "box";
-    shot.width = shot.height = 128;
-    capturePage(out, shot, "canvas_lit.png");
-    int width = 0, height = 0;
-    const std::vector<int> page = pngCodes((out / "canvas_lit.png").string(), width, height);
-    REQUIRE(width == 128);
-    REQUIRE(height == 128);
-    const std::vector<int> expected = pngCodes((baked / "image_lightmapped.png").string(), width, height);
-    const Image lit = readImage((baked / "image_lightmapped.exr").string());
-    const Image mask = awayFromEdges(readImage((baked / "image_albedo.exr").string()), lit, 0.15f);
-    INFO("pixels compared: " << coveredFraction(mask));
-    CHECK(coveredFraction(mask) > 0.5);
-    const CodeDifference difference = codeDifference(page, expected, mask);
-    INFO("page against image_lightmapped.png: " << 100.0 * difference.within << "% of pixels within "
-                                                << kCodeTolerance << " codes, mean " << difference.mean << ", worst "
-                                                << difference.worst);
-    CHECK(difference.worst <= kCodeTolerance);
-    CHECK(difference.mean < 0.25);
+    const PageAgainstImage compared = capturePageAgainstLightmapped(out, baked);
+    const std::vector<int>& page = compared.page;
+    const Image& lit = compared.lit;
+    const Image& mask = compared.mask;
+    int width = 128, height = 128;
 
     // The unlit block is in the comparison: the page and the image agree on the unlit level.
     // (Its pixels are the ones whose albedo is white and whose light is kUnlitLight.)
@@ -339,4 +357,54 @@ TEST_CASE("The viewer page in Chromium shows the bake's lightmap-lit image, code
         CHECK(wrong.within < 0.5);
         CHECK(wrong.mean > 5.0);
     }
+}
+
+TEST_CASE("The viewer page in Chromium draws a shadowmask light as the bake's lightmap-lit image does", "[view][browser]") {
+    // The point-lit box baked with its light in shadowmask mode (the lightmaps hold its
+    // indirect light; the page adds E·cos θ/π × the mask, tools/viewer/shadowmask.js), seen
+    // from the file's camera. The page's capture against image_lightmapped.png, pixels away
+    // from edges, holds the bound of the lightmap alone (the test above): within kCodeTolerance
+    // codes, a mean under a quarter of a code. The same comparison with the image the
+    // lightmaps alone give (the light not drawn) fails by far.
+    VL_SKIP_WITHOUT_CHROMIUM();
+    const fs::path out = test::tempDir("view-shadowmask");
+    fs::remove_all(out);
+    BakeJob job;
+    job.scenePath = test::sourceDir() + "/scenes/cornell_box_point.gltf";
+    job.outputDir = (out / "box").string();
+    job.settings.quiet = true;
+    job.settings.outputs.grids = false;
+    job.settings.generateLightmapUvs = false;
+    job.settings.lightBake = LightBake::Shadowmask;
+    job.settings.imageWidth = job.settings.imageHeight = 128;
+    const BakeReport report = runBake(job);
+    INFO(report.error);
+    REQUIRE(report.ok);
+    const fs::path baked = out / "box";
+    REQUIRE(fs::exists(baked / "lightmap_shadowmask.png"));
+
+    const PageAgainstImage compared = capturePageAgainstLightmapped(out, baked);
+    const std::vector<int>& page = compared.page;
+    const Image& mask = compared.mask;
+    int width = 128, height = 128;
+
+    // The lightmaps alone: the same rays with the shadowmask light not drawn.
+    Diagnostics diagnostics(false, false);
+    Scene scene = loadJobScene(job);
+    VoxelStages stages = bakeVoxelStages(scene, job.settings, diagnostics);
+    std::vector<ShippedLightmap> alone;
+    for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics))
+        alone.push_back({atlas.meshes, shippedLightmapTexels(readImage((baked / (atlas.name + ".exr")).string()))});
+    const std::vector<Camera> cameras = bakeCameras(scene, job.settings);
+    REQUIRE(cameras.size() == 1);
+    const CameraModel model = makeCameraModel(cameras[0], job.settings.imageWidth, job.settings.imageHeight);
+    const std::string png = (out / "lightmaps_alone.png").string();
+    writePngSrgb(bakeLightmapImage(stages.tracing->traceScene, stages.tracing->bvh, model, scene,
+                                   stages.tracing->triangles, job.settings, alone),
+                 png);
+    const CodeDifference wrong = codeDifference(page, pngCodes(png, width, height), mask);
+    INFO("lightmaps alone: " << 100.0 * wrong.within << "% of pixels within " << kCodeTolerance << " codes, mean "
+                             << wrong.mean);
+    CHECK(wrong.within < 0.5);
+    CHECK(wrong.mean > 5.0);
 }
