@@ -381,11 +381,14 @@ constexpr const char* kLightBakeExtension = "VOXLIGHT_light_bake";
 
 // A shadowmask without a channel (a light the bake did not place) is written as indirect: the
 // engine draws it whole.
-tinygltf::Value lightBakeExtension(LightBake mode, int channel = -1) {
+// A sun's disk (Light::angularDiameter > 0), which glTF cannot hold, goes with it: an engine
+// softens the light's shadows by it.
+tinygltf::Value lightBakeExtension(LightBake mode, int channel = -1, float angularDiameter = 0.0f) {
     if (mode == LightBake::Shadowmask && channel < 0) mode = LightBake::Indirect;
     tinygltf::Value::Object object;
     object["mode"] = tinygltf::Value(std::string(lightBakeName(mode)));
     if (mode == LightBake::Shadowmask) object["channel"] = tinygltf::Value(channel);
+    if (angularDiameter > 0.0f) object["angularDiameter"] = tinygltf::Value(double(angularDiameter));
     return tinygltf::Value(object);
 }
 
@@ -397,12 +400,14 @@ void addLightBakes(tinygltf::Model& model, const std::vector<Light>& addedLights
         const auto baked = std::find_if(bakedLights.begin(), bakedLights.end(),
                                         [&](const Light& l) { return l.sourceLight == int(i); });
         if (baked != bakedLights.end())
-            light.extensions[kLightBakeExtension] = lightBakeExtension(baked->bake, baked->maskChannel);
+            light.extensions[kLightBakeExtension] =
+                lightBakeExtension(baked->bake, baked->maskChannel, baked->angularDiameter);
         else if (const auto own = light.extensions.find(kLightBakeExtension); own != light.extensions.end()) {
             LightBake mode = LightBake::All;
             const tinygltf::Value& name = own->second.Get("mode");
             if (name.IsString()) parseLightBake(name.Get<std::string>(), mode);
-            own->second = lightBakeExtension(mode);
+            const tinygltf::Value& disk = own->second.Get("angularDiameter");
+            own->second = lightBakeExtension(mode, -1, disk.IsNumber() ? float(disk.GetNumberAsDouble()) : 0.0f);
         } else
             light.extensions[kLightBakeExtension] = lightBakeExtension(setting);
     }
@@ -428,7 +433,7 @@ void addLightBakes(tinygltf::Model& model, const std::vector<Light>& addedLights
             written.spot.innerConeAngle = light.innerConeAngle;
             written.spot.outerConeAngle = light.outerConeAngle;
         }
-        written.extensions[kLightBakeExtension] = lightBakeExtension(mode, channel);
+        written.extensions[kLightBakeExtension] = lightBakeExtension(mode, channel, light.angularDiameter);
         model.lights.push_back(written);
         if (model.scenes.empty()) model.scenes.emplace_back();
         tinygltf::Node node;

@@ -615,6 +615,13 @@ private:
             const tinygltf::Value& mode = bake->second.Get("mode");
             if (!mode.IsString() || !parseLightBake(mode.Get<std::string>(), light.bake))
                 fail(what + ": VOXLIGHT_light_bake.mode must be \"all\", \"indirect\" or \"shadowmask\"");
+            const tinygltf::Value& disk = bake->second.Get("angularDiameter");
+            if (disk.Type() != tinygltf::NULL_TYPE) {
+                if (light.type != LightType::Directional)
+                    fail(what + ": VOXLIGHT_light_bake.angularDiameter is for directional lights");
+                light.angularDiameter = float(factor(disk.IsNumber() ? disk.GetNumberAsDouble() : -1.0, 0.0, kPi / 2,
+                                                     what + " VOXLIGHT_light_bake.angularDiameter"));
+            }
         }
         light.sourceLight = index;
         scene_.lights.push_back(light);

@@ -150,6 +150,7 @@ TEST_CASE("glTF out marks every light's bake mode and adds the job file's lights
     sun.direction = glm::normalize(vec3(0.75f, -0.45f, -0.2f));
     sun.color = vec3(1.0f, 0.95f, 0.85f);
     sun.intensity = 15.0f;
+    sun.angularDiameter = 0.0093f;  // the sun's disk, which glTF cannot hold: the extension carries it
     sun.bake = LightBake::Indirect;
     Light lamp;
     lamp.name = "lamp";
@@ -179,6 +180,7 @@ TEST_CASE("glTF out marks every light's bake mode and adds the job file's lights
     CHECK(drawn->type == LightType::Directional);
     CHECK(glm::length(drawn->direction - sun.direction) < 1e-5f);
     CHECK(drawn->intensity == Approx(15.0f));
+    CHECK(drawn->angularDiameter == Approx(0.0093f));
     CHECK(glm::length(drawn->color - sun.color) < 1e-6f);
     const auto own = std::find_if(reloaded.lights.begin(), reloaded.lights.end(),
                                   [](const Light& l) { return l.name != "sun"; });

@@ -12,8 +12,10 @@
 // and the browser test use it. ?capture=page runs the page as usual and POSTs /ready once it
 // has drawn, for the browser's own screenshot of it (`--screenshot --whole-page`).
 // ?material=three draws with three.js' materials instead (moz_lightmap.js, for one's own scene).
-// A light whose bake mode is "shadowmask" is drawn as an engine draws it (shadowmask.js): its
-// unshadowed direct light times its channel of the material's shadowmask, added to the lightmap.
+// The lights the bake left to the engine are drawn as an engine draws them, added to the
+// lightmap: a "shadowmask" light as its unshadowed direct light times its channel of the
+// material's shadowmask (shadowmask.js); an "indirect" sun with a shadow map softened by its
+// disk (sun_shadows.js). Indirect point and spot lights are not drawn yet (the page says so).
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
@@ -21,6 +23,7 @@ import { PointerLockControls } from 'three/addons/controls/PointerLockControls.j
 import { VRButton } from 'three/addons/webxr/VRButton.js';
 import { applyMozLightmaps } from './moz_lightmap.js';
 import { shadowmaskLights, shadowmaskUniforms, SHADOWMASK_GLSL } from './shadowmask.js';
+import { drawnSuns, SunShadowMaps, SUN_SHADOW_GLSL } from './sun_shadows.js';
 
 const params = new URLSearchParams(location.search);
 const capturing = params.get('capture') === '';         // the canvas alone, posted to /capture
@@ -56,7 +59,7 @@ out vec4 vColor;
 out vec2 vBaseUv;
 out vec2 vEmissiveUv;
 out vec2 vLightmapUv;
-#ifdef HAS_SHADOWMASK
+#if defined(HAS_SHADOWMASK) || defined(HAS_DRAWN_SUNS)
 uniform mat4 modelMatrix;
 #ifdef HAS_NORMAL
 in vec3 normal;
@@ -89,7 +92,7 @@ void main() {
   p = instanceMatrix * p;
 #endif
   gl_Position = projectionMatrix * modelViewMatrix * p;
-#ifdef HAS_SHADOWMASK
+#if defined(HAS_SHADOWMASK) || defined(HAS_DRAWN_SUNS)
   mat4 toWorld = modelMatrix;
 #ifdef USE_INSTANCING
   toWorld = modelMatrix * instanceMatrix;
@@ -122,11 +125,16 @@ in vec2 vLightmapUv;
 #ifdef HAS_COLOR
 in vec4 vColor;
 #endif
-#ifdef HAS_SHADOWMASK
+#if defined(HAS_SHADOWMASK) || defined(HAS_DRAWN_SUNS)
 uniform vec3 cameraPosition;
 in vec3 vWorldPosition;
 in vec3 vWorldNormal;
+#endif
+#ifdef HAS_SHADOWMASK
 ${SHADOWMASK_GLSL}
+#endif
+#ifdef HAS_DRAWN_SUNS
+${SUN_SHADOW_GLSL}
 #endif
 out vec4 fragColor;
 
@@ -169,12 +177,17 @@ void main() {
 #endif
 #ifdef HAS_LIGHTMAP
   vec3 light = lightmapAt(vLightmapUv);
-#ifdef HAS_SHADOWMASK
+#if defined(HAS_SHADOWMASK) || defined(HAS_DRAWN_SUNS)
   // The side the camera sees, as the bake's lightmap-lit image takes it.
   vec3 ng = normalize(cross(dFdx(vWorldPosition), dFdy(vWorldPosition)));
   if (dot(ng, cameraPosition - vWorldPosition) < 0.0) ng = -ng;
   vec3 ns = dot(vWorldNormal, vWorldNormal) > 0.0 ? normalize(vWorldNormal) * (gl_FrontFacing ? 1.0 : -1.0) : ng;
+#endif
+#ifdef HAS_SHADOWMASK
   light += shadowmaskLight(vWorldPosition, ng, ns, vLightmapUv);
+#endif
+#ifdef HAS_DRAWN_SUNS
+  light += drawnSunLight(vWorldPosition, ng, ns);
 #endif
 #else
   vec3 light = vec3(${UNLIT_LEVEL.toFixed(3)});
@@ -198,7 +211,7 @@ function textureMatrix(texture) {
 }
 
 // One material per (glTF material, attributes the geometry has): the shader reads only what exists.
-function bakedMaterial(source, geometry, lightmap, shared, instanced, maskLights) {
+function bakedMaterial(source, geometry, lightmap, shared, instanced, maskLights, sunShadows) {
   const color = geometry.getAttribute('color');
   const defines = {
     BASE_CHANNEL: source.map ? source.map.channel : 0,
@@ -217,6 +230,8 @@ function bakedMaterial(source, geometry, lightmap, shared, instanced, maskLights
   if (lightmap) defines.HAS_LIGHTMAP = '';
   const masked = lightmap && lightmap.shadowmask && maskLights.length > 0;
   if (masked) defines.HAS_SHADOWMASK = '';
+  const sunlit = lightmap && sunShadows && sunShadows.suns.length > 0;
+  if (sunlit) defines.HAS_DRAWN_SUNS = '';
   if (geometry.getAttribute('normal')) defines.HAS_NORMAL = '';
   if (source.alphaTest > 0) defines.ALPHA_MASK = '';
   if (source.transparent) defines.ALPHA_BLEND = '';
@@ -244,6 +259,7 @@ function bakedMaterial(source, geometry, lightmap, shared, instanced, maskLights
       mode: shared.mode,
       exposure: shared.exposure,
       ...(masked ? shadowmaskUniforms(maskLights, lightmap.shadowmask) : {}),
+      ...(sunlit ? sunShadows.uniforms : {}),
     },
   });
 }
@@ -278,7 +294,7 @@ async function lightmapOf(parser, material, cache) {
   return { texture, range: extension.intensity ?? 1, channel: extension.texCoord ?? 0, shadowmask };
 }
 
-async function applyBakedMaterials(gltf, shared) {
+async function applyBakedMaterials(gltf, shared, sunShadows) {
   const meshes = [];
   gltf.scene.traverse((object) => { if (object.isMesh) meshes.push(object); });
   const textures = new Map();
@@ -295,7 +311,8 @@ async function applyBakedMaterials(gltf, shared) {
       const geometry = mesh.geometry;
       const key = [source.uuid, !!geometry.getAttribute('uv'), !!geometry.getAttribute('uv1'), !!geometry.getAttribute('normal'),
                    geometry.getAttribute('color') ? geometry.getAttribute('color').itemSize : 0, !!mesh.isInstancedMesh].join();
-      if (!made.has(key)) made.set(key, bakedMaterial(source, geometry, lightmap, shared, !!mesh.isInstancedMesh, maskLights));
+      if (!made.has(key))
+        made.set(key, bakedMaterial(source, geometry, lightmap, shared, !!mesh.isInstancedMesh, maskLights, sunShadows));
       replaced.push(made.get(key));
     }
     mesh.material = Array.isArray(mesh.material) ? replaced : replaced[0];
@@ -367,16 +384,23 @@ async function main() {
   // show and exposure controls do not apply to them).
   const threeMaterials = params.get('material') === 'three';
   if (threeMaterials) renderer.outputColorSpace = THREE.SRGBColorSpace;
-  const counts = threeMaterials ? { meshes: await applyMozLightmaps(gltf), unlit: 0 } : await applyBakedMaterials(gltf, shared);
+  // Suns whose direct light the bake left to the engine: a shadow map each, drawn once.
+  const sunShadows = threeMaterials ? null : new SunShadowMaps(drawnSuns(gltf), gltf.scene);
+  const counts = threeMaterials ? { meshes: await applyMozLightmaps(gltf), unlit: 0 }
+                                : await applyBakedMaterials(gltf, shared, sunShadows);
   const world = gltf.scene;
+  if (sunShadows) sunShadows.render(renderer, world);
   // Lights whose direct light the bake left to the engine's shadow maps (VOXLIGHT_light_bake
-  // "indirect", docs/light-bake-modes.md): this page does not draw them yet, so say what is
-  // missing. (Shadowmask lights it draws, above.)
-  const drawnByEngine = (gltf.parser.json.extensions?.KHR_lights_punctual?.lights ?? [])
-    .filter((light) => light.extensions?.VOXLIGHT_light_bake?.mode === 'indirect')
-    .map((light, i) => light.name || `light ${i}`);
-  if (drawnByEngine.length > 0)
-    report(`the lightmaps hold only the indirect light of ${drawnByEngine.join(', ')} (light-bake indirect); ` +
+  // "indirect", docs/light-bake-modes.md) that this page does not draw yet (point and spot
+  // lights, a third sun): say what is missing.
+  let sunsLeft = sunShadows ? sunShadows.suns.length : 0;
+  const notDrawn = (gltf.parser.json.extensions?.KHR_lights_punctual?.lights ?? [])
+    .map((light, i) => ({ light, name: light.name || `light ${i}` }))
+    .filter(({ light }) => light.extensions?.VOXLIGHT_light_bake?.mode === 'indirect')
+    .filter(({ light }) => !(light.type === 'directional' && sunsLeft-- > 0))
+    .map(({ name }) => name);
+  if (notDrawn.length > 0)
+    report(`the lightmaps hold only the indirect light of ${notDrawn.join(', ')} (light-bake indirect); ` +
            'this viewer does not draw their direct light yet: image_lightmapped.exr shows it');
   // A bake under a uniform sky writes its radiance into the scene's extras (glTF has no sky):
   // lit, the background is that sky, with the exposure and the sRGB curve the shader applies.

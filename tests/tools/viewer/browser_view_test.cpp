@@ -5,6 +5,7 @@
 #include "lightmap/lightmap_image.h"
 #include "core/image_io.h"
 #include "metrics/metrics.h"
+#include "scene/gltf_builder.h"
 #include "support/paths.h"
 #include "viewer/browser_capture.h"
 
@@ -169,6 +170,26 @@ PageAgainstImage capturePageAgainstLightmapped(const fs::path& out, const fs::pa
     CHECK(difference.worst <= kCodeTolerance);
     CHECK(difference.mean < 0.25);
     return compared;
+}
+
+// The bake's lightmap-lit image made again from the lightmaps of `baked` alone, every light
+// the engine draws left out: what a page that drew none of them would show. Into
+// <out>/lightmaps_alone.png; its path.
+std::string lightmapsAlonePng(const BakeJob& job, const fs::path& baked, const fs::path& out) {
+    Diagnostics diagnostics(false, false);
+    Scene scene = loadJobScene(job);
+    VoxelStages stages = bakeVoxelStages(scene, job.settings, diagnostics);
+    std::vector<ShippedLightmap> alone;
+    for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics))
+        alone.push_back({atlas.meshes, shippedLightmapTexels(readImage((baked / (atlas.name + ".exr")).string()))});
+    for (TraceLight& light : stages.tracing->traceScene.lights) light.engineDrawn = 0;
+    const CameraModel model =
+        makeCameraModel(bakeCameras(scene, job.settings).at(0), job.settings.imageWidth, job.settings.imageHeight);
+    const std::string png = (out / "lightmaps_alone.png").string();
+    writePngSrgb(bakeLightmapImage(stages.tracing->traceScene, stages.tracing->bvh, model, scene,
+                                   stages.tracing->triangles, job.settings, alone),
+                 png);
+    return png;
 }
 
 #define VL_SKIP_WITHOUT_CHROMIUM()                                                                      \
@@ -389,20 +410,109 @@ TEST_CASE("The viewer page in Chromium draws a shadowmask light as the bake's li
     int width = 128, height = 128;
 
     // The lightmaps alone: the same rays with the shadowmask light not drawn.
-    Diagnostics diagnostics(false, false);
-    Scene scene = loadJobScene(job);
-    VoxelStages stages = bakeVoxelStages(scene, job.settings, diagnostics);
-    std::vector<ShippedLightmap> alone;
-    for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics))
-        alone.push_back({atlas.meshes, shippedLightmapTexels(readImage((baked / (atlas.name + ".exr")).string()))});
-    const std::vector<Camera> cameras = bakeCameras(scene, job.settings);
-    REQUIRE(cameras.size() == 1);
-    const CameraModel model = makeCameraModel(cameras[0], job.settings.imageWidth, job.settings.imageHeight);
-    const std::string png = (out / "lightmaps_alone.png").string();
-    writePngSrgb(bakeLightmapImage(stages.tracing->traceScene, stages.tracing->bvh, model, scene,
-                                   stages.tracing->triangles, job.settings, alone),
-                 png);
+    const std::string png = lightmapsAlonePng(job, baked, out);
     const CodeDifference wrong = codeDifference(page, pngCodes(png, width, height), mask);
+    INFO("lightmaps alone: " << 100.0 * wrong.within << "% of pixels within " << kCodeTolerance << " codes, mean "
+                             << wrong.mean);
+    CHECK(wrong.within < 0.5);
+    CHECK(wrong.mean > 5.0);
+}
+
+TEST_CASE("The viewer page in Chromium draws an indirect-mode sun with a soft shadow map as the lightmap-lit image "
+          "draws it exact",
+          "[view][browser]") {
+    // A floor 2 × 2 m and a plate 0.5 m square 0.3 m over it (each its own chart of a 128²
+    // lightmap), lit by a job file's sun 15° across (wide, so that its penumbra spans pixels) in
+    // indirect mode: the lightmap holds its
+    // indirect light, and the page draws its direct light from a shadow map softened by the
+    // disk (tools/viewer/sun_shadows.js), where image_lightmapped.exr traces it per read. Over
+    // the pixels away from edges the page holds the lightmap's bound; over the penumbrae, a
+    // bound of its own. The lightmaps alone (the sun not drawn) fail by far.
+    VL_SKIP_WITHOUT_CHROMIUM();
+    const fs::path out = test::tempDir("view-drawn-sun");
+    fs::remove_all(out);
+    fs::create_directories(out / "input");
+    test::GltfBuilder b;
+    const int floor = b.vec3({-1, 0, -1, 1, 0, -1, 1, 0, 1, -1, 0, 1});
+    const int plate = b.vec3({-0.25f, 0.3f, -0.25f, 0.25f, 0.3f, -0.25f, 0.25f, 0.3f, 0.25f, -0.25f, 0.3f, 0.25f});
+    const int up = b.vec3({0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0});
+    const int floorUv = b.vec2({0.02f, 0.02f, 0.6f, 0.02f, 0.6f, 0.6f, 0.02f, 0.6f});
+    const int plateUv = b.vec2({0.65f, 0.02f, 0.95f, 0.02f, 0.95f, 0.32f, 0.65f, 0.32f});
+    const int quad = b.indices({0, 2, 1, 0, 3, 2});
+    const auto primitive = [&](int positions, int uv1) {
+        return R"({"attributes": {"POSITION": )" + std::to_string(positions) + R"(, "NORMAL": )" + std::to_string(up) +
+               R"(, "TEXCOORD_1": )" + std::to_string(uv1) + R"(}, "indices": )" + std::to_string(quad) +
+               R"(, "material": 0})";
+    };
+    const std::string members =
+        R"("materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.6, 0.6, 0.6, 1], "metallicFactor": 0}, "doubleSided": true}],
+        "meshes": [{"name": "Floor", "primitives": [)" + primitive(floor, floorUv) + R"(]},
+                   {"name": "Plate", "primitives": [)" + primitive(plate, plateUv) + R"(]}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.9, "znear": 0.01}}],
+        "scene": 0, "scenes": [{"nodes": [0, 1, 2]}],
+        "nodes": [{"mesh": 0}, {"mesh": 1},
+                  {"camera": 0, "translation": [0, 1.6, 1.4], "rotation": [-0.3826834, 0, 0, 0.9238795]}])";
+    BakeJob job;
+    job.scenePath = b.writeGltf((out / "input").string(), "plate", members);
+    job.outputDir = (out / "box").string();
+    job.settings.quiet = true;
+    job.settings.outputs.grids = false;
+    job.settings.generateLightmapUvs = false;
+    job.settings.lightmap.width = job.settings.lightmap.height = 128;
+    job.settings.imageWidth = job.settings.imageHeight = 128;
+    Light sun;
+    sun.name = "sun";
+    sun.type = LightType::Directional;
+    sun.direction = glm::normalize(vec3(0.35f, -1.0f, -0.25f));
+    sun.intensity = 2.0f;
+    sun.angularDiameter = 15.0f * kPi / 180.0f;
+    sun.bake = LightBake::Indirect;
+    job.addedLights = {sun};
+    const BakeReport report = runBake(job);
+    INFO(report.error);
+    REQUIRE(report.ok);
+    const fs::path baked = out / "box";
+
+    const PageAgainstImage compared = capturePageAgainstLightmapped(out, baked);
+
+    // The penumbrae: pixels of the floor and plate (albedo 0.6 over their 5 × 5 neighbours) whose
+    // light lies between a tenth and nine tenths of the way from the umbra's to the sunlit
+    // level. The page's soft shadow map against the bake's disk strata there, a few codes apart
+    // on average (the strata's own noise is a few codes a pixel).
+    const Image albedo = readImage((baked / "image_albedo.exr").string());
+    std::vector<float> levels;
+    std::vector<uint8_t> surface(size_t(128) * 128, 0);
+    for (int y = 2; y < 126; ++y)
+        for (int x = 2; x < 126; ++x) {
+            bool flat = true;
+            for (int dy = -2; dy <= 2; ++dy)
+                for (int dx = -2; dx <= 2; ++dx) flat = flat && albedo.at(x + dx, y + dy, 1) > 0.5f;
+            if (!flat) continue;
+            surface[size_t(y) * 128 + size_t(x)] = 1;
+            levels.push_back(compared.lit.at(x, y, 1));
+        }
+    REQUIRE(levels.size() > 1000);
+    std::sort(levels.begin(), levels.end());
+    const float umbra = levels[levels.size() / 100], sunlit = levels[levels.size() * 9 / 10];
+    double penumbraCodes = 0.0;
+    size_t penumbra = 0;
+    int pageWidth = 128, pageHeight = 128;
+    const std::vector<int> expected = pngCodes((baked / "image_lightmapped.png").string(), pageWidth, pageHeight);
+    for (size_t p = 0; p < surface.size(); ++p) {
+        const float level = compared.lit.pixels[3 * p + 1];
+        if (!surface[p] || level <= umbra + 0.1f * (sunlit - umbra) || level >= umbra + 0.9f * (sunlit - umbra)) continue;
+        int largest = 0;
+        for (size_t c = 0; c < 3; ++c) largest = std::max(largest, std::abs(compared.page[3 * p + c] - expected[3 * p + c]));
+        penumbraCodes += largest;
+        ++penumbra;
+    }
+    INFO("penumbra pixels " << penumbra << ", mean difference " << penumbraCodes / double(std::max<size_t>(penumbra, 1)) << " codes");
+    CHECK(penumbra > 100);
+    CHECK(penumbraCodes / double(penumbra) < 6.0);
+
+    const std::string png = lightmapsAlonePng(job, baked, out);
+    int width = 128, height = 128;
+    const CodeDifference wrong = codeDifference(compared.page, pngCodes(png, width, height), compared.mask);
     INFO("lightmaps alone: " << 100.0 * wrong.within << "% of pixels within " << kCodeTolerance << " codes, mean "
                              << wrong.mean);
     CHECK(wrong.within < 0.5);
