@@ -4,40 +4,25 @@
 // by the sun's disk (`angularDiameter`, percentage-closer soft shadows: the penumbra's width
 // from the blockers' mean depth). `voxlight view` uses it; for one's own three.js shader:
 //
+//   import { PUNCTUAL_GLSL } from './punctual.js';
 //   import { drawnSuns, SunShadowMaps, SUN_SHADOW_GLSL } from './sun_shadows.js';
 //   const shadows = new SunShadowMaps(drawnSuns(gltf), gltf.scene);
 //   shadows.render(renderer, gltf.scene);               // once: the scene does not move
 //   material.uniforms = { ...material.uniforms, ...shadows.uniforms };
-//   // fragment shader: SUN_SHADOW_GLSL, then
+//   // fragment shader: PUNCTUAL_GLSL, SUN_SHADOW_GLSL, then
 //   //   light += drawnSunLight(worldPosition, geometricNormal, shadingNormal);
 //   // the normals unit, world space, on the side the camera sees.
 import * as THREE from 'three';
+import { bakedLights } from './punctual.js';
 
 export const MAX_DRAWN_SUNS = 2;
-const LUMENS_PER_WATT = 683;  // glTF's lux to the bake's W/m² (scene.h)
 
-// The drawn suns of a GLTFLoader result, where its scene puts them now: each { color
-// (radiometric irradiance × colour), direction (the way its light travels), angularDiameter }.
+// The drawn suns of a GLTFLoader result, where its scene puts them now (punctual.js
+// bakedLights), each with its `angularDiameter`.
 export function drawnSuns(gltf) {
-  const json = gltf.parser.json;
-  const definitions = json.extensions?.KHR_lights_punctual?.lights ?? [];
-  const suns = [];
-  gltf.scene.updateMatrixWorld(true);
-  gltf.scene.traverse((object) => {
-    const node = gltf.parser.associations.get(object)?.nodes;
-    if (node === undefined) return;
-    const definition = definitions[json.nodes[node]?.extensions?.KHR_lights_punctual?.light];
-    const bake = definition?.extensions?.VOXLIGHT_light_bake;
-    if (definition?.type !== 'directional' || bake?.mode !== 'indirect') return;
-    const colour = definition.color ?? [1, 1, 1];
-    const watts = (definition.intensity ?? 1) / LUMENS_PER_WATT;
-    suns.push({
-      color: new THREE.Vector3(colour[0] * watts, colour[1] * watts, colour[2] * watts),
-      direction: new THREE.Vector3(0, 0, -1).transformDirection(object.matrixWorld),
-      angularDiameter: bake.angularDiameter ?? 0,
-    });
-  });
-  return suns.slice(0, MAX_DRAWN_SUNS);
+  return bakedLights(gltf, (definition, bake) => definition.type === 'directional' && bake.mode === 'indirect')
+    .map((light) => ({ ...light, angularDiameter: light.bake.angularDiameter ?? 0 }))
+    .slice(0, MAX_DRAWN_SUNS);
 }
 
 // One depth map a sun, an orthographic view along its light over the whole scene's bounds.
@@ -124,6 +109,7 @@ export class SunShadowMaps {
   }
 }
 
+// Needs punctual.js PUNCTUAL_GLSL before it.
 export const SUN_SHADOW_GLSL = /* glsl */ `
 uniform int drawnSunCount;
 uniform vec4 drawnSunColor[${MAX_DRAWN_SUNS}];
@@ -185,10 +171,9 @@ vec3 drawnSunLight(vec3 p, vec3 ng, vec3 ns) {
   vec3 sum = vec3(0.0);
   for (int k = 0; k < ${MAX_DRAWN_SUNS}; ++k) {
     if (k >= drawnSunCount) break;
-    vec3 wi = -drawnSunDirection[k].xyz;
-    float cosS = dot(ns, wi);
-    if (cosS <= 0.0 || dot(ng, wi) <= 0.0) continue;
-    sum += drawnSunColor[k].rgb * (cosS / 3.14159265358979) * drawnSunVisibility(k, p, ng);
+    vec3 e = punctualIrradiance(vec4(drawnSunColor[k].rgb, 0.0), vec4(0.0), drawnSunDirection[k], vec4(0.0), p, ng, ns);
+    if (e == vec3(0.0)) continue;
+    sum += e * (drawnSunVisibility(k, p, ng) / 3.14159265358979);
   }
   return sum;
 }

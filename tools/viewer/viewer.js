@@ -15,7 +15,8 @@
 // The lights the bake left to the engine are drawn as an engine draws them, added to the
 // lightmap: a "shadowmask" light as its unshadowed direct light times its channel of the
 // material's shadowmask (shadowmask.js); an "indirect" sun with a shadow map softened by its
-// disk (sun_shadows.js). Indirect point and spot lights are not drawn yet (the page says so).
+// disk (sun_shadows.js); an "indirect" point or spot light with a cube map of distances
+// (lamp_shadows.js). Past two suns and two lamps the page says what it leaves out.
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
@@ -24,6 +25,8 @@ import { VRButton } from 'three/addons/webxr/VRButton.js';
 import { applyMozLightmaps } from './moz_lightmap.js';
 import { shadowmaskLights, shadowmaskUniforms, SHADOWMASK_GLSL } from './shadowmask.js';
 import { drawnSuns, SunShadowMaps, SUN_SHADOW_GLSL } from './sun_shadows.js';
+import { drawnLamps, LampShadowMaps, LAMP_SHADOW_GLSL } from './lamp_shadows.js';
+import { PUNCTUAL_GLSL } from './punctual.js';
 
 const params = new URLSearchParams(location.search);
 const capturing = params.get('capture') === '';         // the canvas alone, posted to /capture
@@ -59,7 +62,7 @@ out vec4 vColor;
 out vec2 vBaseUv;
 out vec2 vEmissiveUv;
 out vec2 vLightmapUv;
-#if defined(HAS_SHADOWMASK) || defined(HAS_DRAWN_SUNS)
+#if defined(HAS_SHADOWMASK) || defined(HAS_DRAWN_SUNS) || defined(HAS_DRAWN_LAMPS)
 uniform mat4 modelMatrix;
 #ifdef HAS_NORMAL
 in vec3 normal;
@@ -92,7 +95,7 @@ void main() {
   p = instanceMatrix * p;
 #endif
   gl_Position = projectionMatrix * modelViewMatrix * p;
-#if defined(HAS_SHADOWMASK) || defined(HAS_DRAWN_SUNS)
+#if defined(HAS_SHADOWMASK) || defined(HAS_DRAWN_SUNS) || defined(HAS_DRAWN_LAMPS)
   mat4 toWorld = modelMatrix;
 #ifdef USE_INSTANCING
   toWorld = modelMatrix * instanceMatrix;
@@ -125,13 +128,17 @@ in vec2 vLightmapUv;
 #ifdef HAS_COLOR
 in vec4 vColor;
 #endif
-#if defined(HAS_SHADOWMASK) || defined(HAS_DRAWN_SUNS)
+#if defined(HAS_SHADOWMASK) || defined(HAS_DRAWN_SUNS) || defined(HAS_DRAWN_LAMPS)
 uniform vec3 cameraPosition;
 in vec3 vWorldPosition;
 in vec3 vWorldNormal;
+${PUNCTUAL_GLSL}
 #endif
 #ifdef HAS_SHADOWMASK
 ${SHADOWMASK_GLSL}
+#endif
+#ifdef HAS_DRAWN_LAMPS
+${LAMP_SHADOW_GLSL}
 #endif
 #ifdef HAS_DRAWN_SUNS
 ${SUN_SHADOW_GLSL}
@@ -177,7 +184,7 @@ void main() {
 #endif
 #ifdef HAS_LIGHTMAP
   vec3 light = lightmapAt(vLightmapUv);
-#if defined(HAS_SHADOWMASK) || defined(HAS_DRAWN_SUNS)
+#if defined(HAS_SHADOWMASK) || defined(HAS_DRAWN_SUNS) || defined(HAS_DRAWN_LAMPS)
   // The side the camera sees, as the bake's lightmap-lit image takes it.
   vec3 ng = normalize(cross(dFdx(vWorldPosition), dFdy(vWorldPosition)));
   if (dot(ng, cameraPosition - vWorldPosition) < 0.0) ng = -ng;
@@ -188,6 +195,9 @@ void main() {
 #endif
 #ifdef HAS_DRAWN_SUNS
   light += drawnSunLight(vWorldPosition, ng, ns);
+#endif
+#ifdef HAS_DRAWN_LAMPS
+  light += drawnLampLight(vWorldPosition, ng, ns);
 #endif
 #else
   vec3 light = vec3(${UNLIT_LEVEL.toFixed(3)});
@@ -211,7 +221,7 @@ function textureMatrix(texture) {
 }
 
 // One material per (glTF material, attributes the geometry has): the shader reads only what exists.
-function bakedMaterial(source, geometry, lightmap, shared, instanced, maskLights, sunShadows) {
+function bakedMaterial(source, geometry, lightmap, shared, instanced, maskLights, engine) {
   const color = geometry.getAttribute('color');
   const defines = {
     BASE_CHANNEL: source.map ? source.map.channel : 0,
@@ -230,8 +240,10 @@ function bakedMaterial(source, geometry, lightmap, shared, instanced, maskLights
   if (lightmap) defines.HAS_LIGHTMAP = '';
   const masked = lightmap && lightmap.shadowmask && maskLights.length > 0;
   if (masked) defines.HAS_SHADOWMASK = '';
-  const sunlit = lightmap && sunShadows && sunShadows.suns.length > 0;
+  const sunlit = lightmap && engine && engine.suns.suns.length > 0;
   if (sunlit) defines.HAS_DRAWN_SUNS = '';
+  const lamplit = lightmap && engine && engine.lamps.lamps.length > 0;
+  if (lamplit) defines.HAS_DRAWN_LAMPS = '';
   if (geometry.getAttribute('normal')) defines.HAS_NORMAL = '';
   if (source.alphaTest > 0) defines.ALPHA_MASK = '';
   if (source.transparent) defines.ALPHA_BLEND = '';
@@ -259,7 +271,8 @@ function bakedMaterial(source, geometry, lightmap, shared, instanced, maskLights
       mode: shared.mode,
       exposure: shared.exposure,
       ...(masked ? shadowmaskUniforms(maskLights, lightmap.shadowmask) : {}),
-      ...(sunlit ? sunShadows.uniforms : {}),
+      ...(sunlit ? engine.suns.uniforms : {}),
+      ...(lamplit ? engine.lamps.uniforms : {}),
     },
   });
 }
@@ -294,7 +307,7 @@ async function lightmapOf(parser, material, cache) {
   return { texture, range: extension.intensity ?? 1, channel: extension.texCoord ?? 0, shadowmask };
 }
 
-async function applyBakedMaterials(gltf, shared, sunShadows) {
+async function applyBakedMaterials(gltf, shared, engine) {
   const meshes = [];
   gltf.scene.traverse((object) => { if (object.isMesh) meshes.push(object); });
   const textures = new Map();
@@ -312,7 +325,7 @@ async function applyBakedMaterials(gltf, shared, sunShadows) {
       const key = [source.uuid, !!geometry.getAttribute('uv'), !!geometry.getAttribute('uv1'), !!geometry.getAttribute('normal'),
                    geometry.getAttribute('color') ? geometry.getAttribute('color').itemSize : 0, !!mesh.isInstancedMesh].join();
       if (!made.has(key))
-        made.set(key, bakedMaterial(source, geometry, lightmap, shared, !!mesh.isInstancedMesh, maskLights, sunShadows));
+        made.set(key, bakedMaterial(source, geometry, lightmap, shared, !!mesh.isInstancedMesh, maskLights, engine));
       replaced.push(made.get(key));
     }
     mesh.material = Array.isArray(mesh.material) ? replaced : replaced[0];
@@ -384,24 +397,27 @@ async function main() {
   // show and exposure controls do not apply to them).
   const threeMaterials = params.get('material') === 'three';
   if (threeMaterials) renderer.outputColorSpace = THREE.SRGBColorSpace;
-  // Suns whose direct light the bake left to the engine: a shadow map each, drawn once.
-  const sunShadows = threeMaterials ? null : new SunShadowMaps(drawnSuns(gltf), gltf.scene);
+  // Lights whose direct light the bake left to the engine: a shadow map each, drawn once.
+  const engine = threeMaterials ? null
+    : { suns: new SunShadowMaps(drawnSuns(gltf), gltf.scene), lamps: new LampShadowMaps(drawnLamps(gltf)) };
   const counts = threeMaterials ? { meshes: await applyMozLightmaps(gltf), unlit: 0 }
-                                : await applyBakedMaterials(gltf, shared, sunShadows);
+                                : await applyBakedMaterials(gltf, shared, engine);
   const world = gltf.scene;
-  if (sunShadows) sunShadows.render(renderer, world);
+  if (engine) {
+    engine.suns.render(renderer, world);
+    engine.lamps.render(renderer, world);
+  }
   // Lights whose direct light the bake left to the engine's shadow maps (VOXLIGHT_light_bake
-  // "indirect", docs/light-bake-modes.md) that this page does not draw yet (point and spot
-  // lights, a third sun): say what is missing.
-  let sunsLeft = sunShadows ? sunShadows.suns.length : 0;
-  const notDrawn = (gltf.parser.json.extensions?.KHR_lights_punctual?.lights ?? [])
+  // "indirect", docs/light-bake-modes.md) past what this page draws (two suns, two lamps):
+  // say what is missing.
+  const engineDrawn = (gltf.parser.json.extensions?.KHR_lights_punctual?.lights ?? [])
     .map((light, i) => ({ light, name: light.name || `light ${i}` }))
-    .filter(({ light }) => light.extensions?.VOXLIGHT_light_bake?.mode === 'indirect')
-    .filter(({ light }) => !(light.type === 'directional' && sunsLeft-- > 0))
-    .map(({ name }) => name);
-  if (notDrawn.length > 0)
-    report(`the lightmaps hold only the indirect light of ${notDrawn.join(', ')} (light-bake indirect); ` +
-           'this viewer does not draw their direct light yet: image_lightmapped.exr shows it');
+    .filter(({ light }) => light.extensions?.VOXLIGHT_light_bake?.mode === 'indirect');
+  const drawnCount = engine ? engine.suns.suns.length + engine.lamps.lamps.length : 0;
+  if (engineDrawn.length > drawnCount)
+    report(`the lightmaps hold only the indirect light of ${engineDrawn.map(({ name }) => name).join(', ')} ` +
+           `(light-bake indirect); this viewer draws the direct light of ${drawnCount} of them ` +
+           '(two suns and two point or spot lights at most): image_lightmapped.exr shows all');
   // A bake under a uniform sky writes its radiance into the scene's extras (glTF has no sky):
   // lit, the background is that sky, with the exposure and the sRGB curve the shader applies.
   const sky = world.userData?.voxlight?.sky;

@@ -380,42 +380,44 @@ TEST_CASE("The viewer page in Chromium shows the bake's lightmap-lit image, code
     }
 }
 
-TEST_CASE("The viewer page in Chromium draws a shadowmask light as the bake's lightmap-lit image does", "[view][browser]") {
-    // The point-lit box baked with its light in shadowmask mode (the lightmaps hold its
-    // indirect light; the page adds E·cos θ/π × the mask, tools/viewer/shadowmask.js), seen
-    // from the file's camera. The page's capture against image_lightmapped.png, pixels away
-    // from edges, holds the bound of the lightmap alone (the test above): within kCodeTolerance
-    // codes, a mean under a quarter of a code. The same comparison with the image the
-    // lightmaps alone give (the light not drawn) fails by far.
+TEST_CASE("The viewer page in Chromium draws the point light an engine draws, shadowmask or indirect, as the "
+          "bake's lightmap-lit image does",
+          "[view][browser]") {
+    // The point-lit box baked with its light in each mode the engine draws (the lightmaps hold
+    // its indirect light): shadowmask, where the page adds E·cos θ/π × the mask
+    // (tools/viewer/shadowmask.js), and indirect, where it adds E·cos θ/π × the visibility
+    // from a cube map of distances (tools/viewer/lamp_shadows.js). Seen from the file's camera,
+    // the page's capture against image_lightmapped.png, pixels away from edges, holds the bound
+    // of the lightmap alone (the test above): within kCodeTolerance codes, a mean under a
+    // quarter of a code. The same comparison with the image the lightmaps alone give (the light
+    // not drawn) fails by far.
     VL_SKIP_WITHOUT_CHROMIUM();
-    const fs::path out = test::tempDir("view-shadowmask");
-    fs::remove_all(out);
-    BakeJob job;
-    job.scenePath = test::sourceDir() + "/scenes/cornell_box_point.gltf";
-    job.outputDir = (out / "box").string();
-    job.settings.quiet = true;
-    job.settings.outputs.grids = false;
-    job.settings.generateLightmapUvs = false;
-    job.settings.lightBake = LightBake::Shadowmask;
-    job.settings.imageWidth = job.settings.imageHeight = 128;
-    const BakeReport report = runBake(job);
-    INFO(report.error);
-    REQUIRE(report.ok);
-    const fs::path baked = out / "box";
-    REQUIRE(fs::exists(baked / "lightmap_shadowmask.png"));
+    for (const LightBake mode : {LightBake::Shadowmask, LightBake::Indirect}) {
+        const fs::path out = test::tempDir(std::string("view-point-") + lightBakeName(mode));
+        fs::remove_all(out);
+        BakeJob job;
+        job.scenePath = test::sourceDir() + "/scenes/cornell_box_point.gltf";
+        job.outputDir = (out / "box").string();
+        job.settings.quiet = true;
+        job.settings.outputs.grids = false;
+        job.settings.generateLightmapUvs = false;
+        job.settings.lightBake = mode;
+        job.settings.imageWidth = job.settings.imageHeight = 128;
+        const BakeReport report = runBake(job);
+        INFO(lightBakeName(mode) << ": " << report.error);
+        REQUIRE(report.ok);
+        const fs::path baked = out / "box";
+        CHECK(fs::exists(baked / "lightmap_shadowmask.png") == (mode == LightBake::Shadowmask));
 
-    const PageAgainstImage compared = capturePageAgainstLightmapped(out, baked);
-    const std::vector<int>& page = compared.page;
-    const Image& mask = compared.mask;
-    int width = 128, height = 128;
-
-    // The lightmaps alone: the same rays with the shadowmask light not drawn.
-    const std::string png = lightmapsAlonePng(job, baked, out);
-    const CodeDifference wrong = codeDifference(page, pngCodes(png, width, height), mask);
-    INFO("lightmaps alone: " << 100.0 * wrong.within << "% of pixels within " << kCodeTolerance << " codes, mean "
-                             << wrong.mean);
-    CHECK(wrong.within < 0.5);
-    CHECK(wrong.mean > 5.0);
+        const PageAgainstImage compared = capturePageAgainstLightmapped(out, baked);
+        int width = 128, height = 128;
+        const std::string png = lightmapsAlonePng(job, baked, out);
+        const CodeDifference wrong = codeDifference(compared.page, pngCodes(png, width, height), compared.mask);
+        INFO("lightmaps alone: " << 100.0 * wrong.within << "% of pixels within " << kCodeTolerance << " codes, mean "
+                                 << wrong.mean);
+        CHECK(wrong.within < 0.5);
+        CHECK(wrong.mean > 5.0);
+    }
 }
 
 TEST_CASE("The viewer page in Chromium draws an indirect-mode sun with a soft shadow map as the lightmap-lit image "
