@@ -308,6 +308,8 @@ std::map<PrimitiveKey, size_t> lightmapOfPrimitives(const tinygltf::Model& model
 void attachLightmaps(tinygltf::Model& model, const std::map<PrimitiveKey, size_t>& lightmapOf,
                      const LightmapTextures& textureOf, const std::vector<ExportedLightmap>& lightmaps) {
     constexpr size_t kUnlit = static_cast<size_t>(-1);
+    // A scene.glb baked again: its old shadowmasks are not this bake's.
+    for (tinygltf::Material& material : model.materials) material.extensions.erase(kShadowmaskExtension);
     std::map<int, std::set<size_t>> usesOf;  // material (−1: the default) → lightmaps, kUnlit
     for (size_t m = 0; m < model.meshes.size(); ++m)
         for (size_t p = 0; p < model.meshes[m].primitives.size(); ++p) {
@@ -339,9 +341,10 @@ void attachLightmaps(tinygltf::Model& model, const std::map<PrimitiveKey, size_t
     if (!lightmaps.empty() &&
         std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), kLightmapExtension) == model.extensionsUsed.end())
         model.extensionsUsed.push_back(kLightmapExtension);
-    if (std::any_of(textureOf.shadowmask.begin(), textureOf.shadowmask.end(), [](int t) { return t >= 0; }) &&
-        std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), kShadowmaskExtension) == model.extensionsUsed.end())
-        model.extensionsUsed.push_back(kShadowmaskExtension);
+    std::vector<std::string>& used = model.extensionsUsed;
+    used.erase(std::remove(used.begin(), used.end(), kShadowmaskExtension), used.end());
+    if (std::any_of(textureOf.shadowmask.begin(), textureOf.shadowmask.end(), [](int t) { return t >= 0; }))
+        used.push_back(kShadowmaskExtension);
 }
 
 // tinygltf writes `zfar` always, and 0 (its "infinite projection") is invalid glTF: a camera

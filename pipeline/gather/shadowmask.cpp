@@ -20,6 +20,9 @@ Image shadowmaskTexels(const SurfaceSampleSet& receivers, const TraceSceneView& 
                        size_t firstElement, size_t lastElement) {
     if (!hasShadowmaskLights(scene)) return Image();
     Image mask(receivers.width, receivers.height, kShadowmaskChannels);
+    bool used[kShadowmaskChannels] = {};
+    for (uint32_t l = 0; l < scene.lightCount; ++l)
+        if (scene.lights[l].maskChannel >= 0) used[scene.lights[l].maskChannel] = true;
     const size_t elements = std::min(receivers.elementCount(), lastElement);
     tbb::parallel_for(tbb::blocked_range<size_t>(std::min(firstElement, elements), elements, 64),
                       [&](const tbb::blocked_range<size_t>& range) {
@@ -38,9 +41,9 @@ Image shadowmaskTexels(const SurfaceSampleSet& receivers, const TraceSceneView& 
                                   }
                                   weight += r.weight;
                               }
-                              if (!(weight > 0.0f)) continue;
                               for (int c = 0; c < kShadowmaskChannels; ++c)
-                                  mask.pixels[e * kShadowmaskChannels + size_t(c)] = std::min(1.0f, seen[c] / weight);
+                                  mask.pixels[e * kShadowmaskChannels + size_t(c)] =
+                                      !used[c] ? 1.0f : weight > 0.0f ? std::min(1.0f, seen[c] / weight) : 0.0f;
                           }
                       });
     return mask;

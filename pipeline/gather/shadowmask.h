@@ -22,11 +22,11 @@ constexpr int kShadowmaskStrata = 8;
 bool hasShadowmaskLights(const TraceSceneView& scene);
 
 // Per texel [firstElement, lastElement) of `receivers` (the rest 0): the weighted mean over its
-// samples of lightVisibility, at each sample's point, one channel per shadowmask light (the
-// others 0). A texel's samples sit at the texel's centre on a flat surface (receivers.h), so the
-// mask is the visibility there: what bilinear reads between texel centres reconstruct. Each
-// sample seeds its strata with its index in the whole set: the same bytes at any thread count
-// and in any band of rows. Empty when no light has a channel.
+// samples of lightVisibility, at each sample's point, one channel per shadowmask light. A texel's samples sit at the texel's centre on a flat surface (receivers.h), so the
+// mask is the visibility there: what bilinear reads between texel centres reconstruct. A
+// channel without a light holds 1 (opaque alpha: an importer that premultiplies alpha leaves
+// the other channels alone). Each sample seeds its strata with its index in the whole set: the
+// same bytes at any thread count and in any band of rows. Empty when no light has a channel.
 Image shadowmaskTexels(const SurfaceSampleSet& receivers, const TraceSceneView& scene, const BvhView& bvh,
                        size_t firstElement = 0, size_t lastElement = SIZE_MAX);
 

@@ -619,8 +619,9 @@ private:
             if (disk.Type() != tinygltf::NULL_TYPE) {
                 if (light.type != LightType::Directional)
                     fail(what + ": VOXLIGHT_light_bake.angularDiameter is for directional lights");
-                light.angularDiameter = float(factor(disk.IsNumber() ? disk.GetNumberAsDouble() : -1.0, 0.0, kPi / 2,
-                                                     what + " VOXLIGHT_light_bake.angularDiameter"));
+                if (!disk.IsNumber()) fail(what + ": VOXLIGHT_light_bake.angularDiameter must be a number (radians)");
+                light.angularDiameter =
+                    factor(disk.GetNumberAsDouble(), 0.0, kPi / 2, what + " VOXLIGHT_light_bake.angularDiameter");
             }
         }
         light.sourceLight = index;

@@ -416,6 +416,14 @@ TEST_CASE("A shadowmask holds a sun's visibility per texel: over a penumbra, the
     sun.intensity = sunE;
     sun.angularDiameter = diameter;
     scene.lights.push_back(sun);
+    // A second sun, a point, slanted along +x: the roof's edge hides it over x < 0.5 · 0.5 =
+    // 0.25, so its channel (1) differs from the first's, and the view must read each light's own.
+    Light slanted = sun;
+    slanted.name = "slanted";
+    slanted.direction = glm::normalize(vec3(0.5f, -1.0f, 0.0f));
+    slanted.angularDiameter = 0.0f;
+    slanted.intensity = 1.0f;
+    scene.lights.push_back(slanted);
     Camera camera = cameraLookingDown(vec3(0.0f, 0.3f, 0.0f));
     camera.name = "down";
     scene.cameras.push_back(camera);
@@ -460,16 +468,21 @@ TEST_CASE("A shadowmask holds a sun's visibility per texel: over a penumbra, the
         shareSum += share;
         worst = std::max(worst, std::abs(double(mask) - share));
     }
-    // The other channels hold no light.
+    // The slanted sun's channel: hidden over x < 0.25, seen beyond (a texel from the edge);
+    // the channels without a light hold 1 (opaque alpha).
+    for (int i = 0; i < N; ++i) {
+        const double x = 2.0 * (i + 0.5) / N - 1.0;
+        if (std::abs(x - 0.25) > 2.0 / N) CHECK(lightmap.shadowmask.at(i, N / 2, 1) == (x > 0.25 ? 1.0f : 0.0f));
+    }
     for (size_t t = 0; t < size_t(N) * N; ++t)
-        for (int c = 1; c < kShadowmaskChannels; ++c) CHECK(lightmap.shadowmask.pixels[4 * t + size_t(c)] == 0.0f);
+        for (int c = 2; c < kShadowmaskChannels; ++c) CHECK(lightmap.shadowmask.pixels[4 * t + size_t(c)] == 1.0f);
     REQUIRE(inPenumbra >= 10);
     CHECK(maskSum / inPenumbra == Approx(shareSum / inPenumbra).margin(0.01));
     CHECK(worst < 0.05);
 
-    // The lightmap-lit view: the sun unshadowed times the bilinear mask, against the same view
-    // with the sun drawn exact per read (indirect mode, 16 stratified directions a read in the
-    // penumbra: a few percent of noise a pixel). The edge runs along the image's columns, so
+    // The lightmap-lit view: each sun unshadowed times its channel of the bilinear mask, against
+    // the same view with the suns drawn exact per read (indirect mode, 16 stratified directions
+    // a read in the penumbra: a few percent of noise a pixel). The edge runs along the image's columns, so
     // each column's mean over 48 rows takes that noise down: they must hold the same light
     // within 2% of the sunlit level, the penumbra included (its ramp spans eleven texels).
     const double lit = albedo * sunE / kPi;

@@ -195,6 +195,18 @@ TEST_CASE("A glTF light's bake mode other than all or indirect is refused naming
         "nodes": [{"extensions": {"KHR_lights_punctual": {"light": 0}}}], "scenes": [{"nodes": [0]}], "scene": 0})";
     CHECK_THROWS_WITH(loadGltf(dir + "/bad.gltf"), Catch::Contains("bad.gltf") && Catch::Contains("'lamp'") &&
                                                         Catch::Contains("VOXLIGHT_light_bake.mode"));
+    // A sun's disk that is not a number, or a disk on a point light.
+    std::ofstream(dir + "/disk.gltf") << R"({"asset": {"version": "2.0"}, "extensionsUsed": ["KHR_lights_punctual", "VOXLIGHT_light_bake"],
+        "extensions": {"KHR_lights_punctual": {"lights": [{"name": "sun", "type": "directional", "intensity": 10,
+            "extensions": {"VOXLIGHT_light_bake": {"mode": "indirect", "angularDiameter": "wide"}}}]}},
+        "nodes": [{"extensions": {"KHR_lights_punctual": {"light": 0}}}], "scenes": [{"nodes": [0]}], "scene": 0})";
+    CHECK_THROWS_WITH(loadGltf(dir + "/disk.gltf"), Catch::Contains("disk.gltf") && Catch::Contains("'sun'") &&
+                                                        Catch::Contains("angularDiameter must be a number"));
+    std::ofstream(dir + "/lamp.gltf") << R"({"asset": {"version": "2.0"}, "extensionsUsed": ["KHR_lights_punctual", "VOXLIGHT_light_bake"],
+        "extensions": {"KHR_lights_punctual": {"lights": [{"name": "lamp", "type": "point", "intensity": 10,
+            "extensions": {"VOXLIGHT_light_bake": {"mode": "indirect", "angularDiameter": 0.01}}}]}},
+        "nodes": [{"extensions": {"KHR_lights_punctual": {"light": 0}}}], "scenes": [{"nodes": [0]}], "scene": 0})";
+    CHECK_THROWS_WITH(loadGltf(dir + "/lamp.gltf"), Catch::Contains("'lamp'") && Catch::Contains("for directional lights"));
 }
 
 TEST_CASE("glTF out writes shadowmask lights with their channels and points each lightmapped material at its "
@@ -240,6 +252,7 @@ TEST_CASE("glTF out writes shadowmask lights with their channels and points each
     int masked = 0;
     for (const tinygltf::Material& material : after.materials) {
         const auto it = material.extensions.find("VOXLIGHT_shadowmask");
+        CHECK((it != material.extensions.end()) == (lightmapOf(material) != nullptr));  // every lightmapped one
         if (it == material.extensions.end()) continue;
         ++masked;
         REQUIRE(lightmapOf(material));
@@ -255,6 +268,13 @@ TEST_CASE("glTF out writes shadowmask lights with their channels and points each
     const Scene reloaded = loadGltf(out);
     REQUIRE(reloaded.lights.size() == 2);
     for (const Light& light : reloaded.lights) CHECK(light.bake == LightBake::Shadowmask);
+
+    // Baked again without a shadowmask, the file keeps none of the old one's references.
+    const std::string again = test::tempDir("gltf-out-shadowmask") + "/again.glb";
+    writeLightmappedGlb(out, sources, {}, {grey("lightmap", all, 1.0f)}, {}, again, diagnostics);
+    const tinygltf::Model rewritten = reread(again);
+    for (const tinygltf::Material& material : rewritten.materials) CHECK(!material.extensions.count("VOXLIGHT_shadowmask"));
+    CHECK(std::count(rewritten.extensionsUsed.begin(), rewritten.extensionsUsed.end(), "VOXLIGHT_shadowmask") == 0);
 }
 
 TEST_CASE("A shadowmask ships as 8-bit linear bytes, each within half a step of its value", "[export]") {

@@ -90,9 +90,10 @@ int main(int argc, char** argv) {
         std::vector<ShippedLightmap> shipped, floats;
         for (const LightmapAtlas& atlas : buildLightmapReceivers(scene, stages.lightmap, diagnostics)) {
             const ReceiverLighting lit = gather.atlasRows(atlas, 0, atlas.receivers.height);
-            const BakedLightmap lightmap = finishLightmap(atlas, lit.direct, lit.indirect, lit.open, scene, job.settings);
-            shipped.push_back({lightmap.meshes, shippedLightmapTexels(lightmap.total)});
-            floats.push_back({lightmap.meshes, lightmap.total});
+            const BakedLightmap lightmap =
+                finishLightmap(atlas, lit.direct, lit.indirect, lit.open, scene, job.settings, lit.shadowmask);
+            shipped.push_back({lightmap.meshes, shippedLightmapTexels(lightmap.total), shippedShadowmask(lightmap.shadowmask)});
+            floats.push_back({lightmap.meshes, lightmap.total, lightmap.shadowmask});
             std::printf("lightmap '%s': %d x %d, %zu covered texels, %zu meshes\n", lightmap.name.c_str(),
                         lightmap.total.width, lightmap.total.height, lightmap.coveredTexels, lightmap.meshes.size());
         }

@@ -106,8 +106,8 @@ uniform vec4 drawnLampColor[${MAX_DRAWN_LAMPS}];
 uniform vec4 drawnLampPosition[${MAX_DRAWN_LAMPS}];
 uniform vec4 drawnLampDirection[${MAX_DRAWN_LAMPS}];
 uniform vec4 drawnLampShape[${MAX_DRAWN_LAMPS}];
-uniform samplerCube drawnLampMap0;
-uniform samplerCube drawnLampMap1;
+uniform highp samplerCube drawnLampMap0;
+uniform highp samplerCube drawnLampMap1;
 uniform float drawnLampTexelAngle;
 
 // Whether lamp k sees p: the nearest surface along the way from the light, against p's own
@@ -117,7 +117,7 @@ float drawnLampVisibility(int k, vec3 p, vec3 ng) {
   float distance0 = length(d);
   float slack = 2.0 * drawnLampTexelAngle * distance0;
   vec3 q = p + ng * slack - drawnLampPosition[k].xyz;
-  float inverse = k == 0 ? texture(drawnLampMap0, q).r : texture(drawnLampMap1, q).r;
+  float inverse = k == 0 ? textureLod(drawnLampMap0, q, 0.0).r : textureLod(drawnLampMap1, q, 0.0).r;
   if (!(inverse > 0.0)) return 1.0;
   return 1.0 / inverse < length(q) - slack ? 0.0 : 1.0;
 }

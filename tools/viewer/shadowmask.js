@@ -53,7 +53,7 @@ export function shadowmaskUniforms(lights, texture) {
 
 // Needs punctual.js PUNCTUAL_GLSL before it.
 export const SHADOWMASK_GLSL = /* glsl */ `
-uniform sampler2D shadowMask;
+uniform highp sampler2D shadowMask;
 uniform int maskLightCount;
 uniform vec4 maskLightColor[${MAX_SHADOWMASK_LIGHTS}];      // rgb: W/m² or W/sr; w: 0 directional, 1 point, 2 spot
 uniform vec4 maskLightPosition[${MAX_SHADOWMASK_LIGHTS}];   // xyz; w: range (0: none)

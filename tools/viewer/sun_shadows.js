@@ -118,11 +118,12 @@ uniform vec4 drawnSunShape[${MAX_DRAWN_SUNS}];
 uniform vec4 drawnSunRight[${MAX_DRAWN_SUNS}];
 uniform vec4 drawnSunUp[${MAX_DRAWN_SUNS}];
 uniform mat4 drawnSunMatrix[${MAX_DRAWN_SUNS}];
-uniform sampler2D drawnSunMap0;
-uniform sampler2D drawnSunMap1;
+uniform highp sampler2D drawnSunMap0;
+uniform highp sampler2D drawnSunMap1;
 
 float drawnSunDepth(int k, vec2 uv) {
-  return k == 0 ? texture(drawnSunMap0, uv).r : texture(drawnSunMap1, uv).r;
+  // Level 0 by name: read in loops and branches, where implicit derivatives are undefined.
+  return k == 0 ? textureLod(drawnSunMap0, uv, 0.0).r : textureLod(drawnSunMap1, uv, 0.0).r;
 }
 
 // A fixed spiral of n points over the unit disk (the same at every pixel: no noise).

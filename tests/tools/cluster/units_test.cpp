@@ -6,6 +6,7 @@
 #include "cluster/units.h"
 #include "cluster/voxel_state.h"
 #include "core/error.h"
+#include "core/image_io.h"
 #include "support/paths.h"
 #include "three_scenes.h"
 #include "scene/gltf_builder.h"
@@ -108,7 +109,8 @@ TEST_CASE("A scene whose lightmaps have no mesh to bake merges as its local bake
 TEST_CASE("A lightmap whose seams are stitched merges as its local bake, its shadowmask too", "[cluster]") {
     // A 2 × 2 m floor split at x = 1 into two charts of a 32² lightmap, the second turned a
     // quarter and coarser (as bake/lightmap_seams_test.cpp's), under a point light: its seam is
-    // stitched after the bands are put together, as the local bake stitches it.
+    // stitched after the bands are put together, as the local bake stitches it. A plate without
+    // a lightmap, 0.6 m up, casts a shadow across the seam (x 0.8–1.4).
     const fs::path root = test::tempDir("cluster-seams");
     fs::remove_all(root);
     fs::create_directories(root);
@@ -119,14 +121,19 @@ TEST_CASE("A lightmap whose seams are stitched merges as its local bake, its sha
     for (float& v : uv1) v /= 32.0f;
     const int texcoords = b.vec2(uv1);
     const int indices = b.indices({0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7});
+    const int plate = b.vec3({0.75f, 0.6f, 0.7f, 0.75f, 0.6f, 1.1f, 1.05f, 0.6f, 1.1f, 1.05f, 0.6f, 0.7f});
+    const int plateIndices = b.indices({0, 1, 2, 0, 2, 3});
     const std::string members =
         R"("meshes": [{"name": "Floor", "primitives": [{"attributes": {"POSITION": )" + std::to_string(positions) +
         R"(, "NORMAL": )" + std::to_string(normals) + R"(, "TEXCOORD_1": )" + std::to_string(texcoords) +
-        R"(}, "indices": )" + std::to_string(indices) + R"(}]}],
+        R"(}, "indices": )" + std::to_string(indices) + R"(}]},
+        {"name": "Plate", "primitives": [{"attributes": {"POSITION": )" + std::to_string(plate) +
+        R"(}, "indices": )" + std::to_string(plateIndices) + R"(}]}],
         "extensionsUsed": ["KHR_lights_punctual"],
         "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 30}]}},
-        "scene": 0, "scenes": [{"nodes": [0, 1]}],
-        "nodes": [{"mesh": 0}, {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0.7, 1.2, 0.9]}])";
+        "scene": 0, "scenes": [{"nodes": [0, 1, 2]}],
+        "nodes": [{"mesh": 0}, {"extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0.7, 1.2, 0.9]},
+                  {"mesh": 1}])";
     const std::string scene = b.writeGltf(root.string(), "split_floor", members);
     // Baked whole, and with the light in shadowmask mode: its mask's bands are put together,
     // dilated and stitched as the local bake's.
@@ -138,6 +145,7 @@ TEST_CASE("A lightmap whose seams are stitched merges as its local bake, its sha
         job.settings.voxel.resolution = 16;
         job.settings.lightmap.width = job.settings.lightmap.height = 32;
         job.settings.lightBake = mode;
+        job.settings.generateLightmapUvs = false;  // the plate only casts its shadow
         job.outputDir = (dir / "local").string();
         const BakeReport local = runBake(job);
         INFO(lightBakeName(mode) << ": " << local.error);
@@ -150,6 +158,18 @@ TEST_CASE("A lightmap whose seams are stitched merges as its local bake, its sha
             CHECK(local.lightmapSeams->afterAtEdge.meanRelative < local.lightmapSeams->beforeAtEdge.meanRelative);
         const bool masked = std::count(local.files.begin(), local.files.end(), "lightmap_shadowmask.png") == 1;
         CHECK(masked == (mode == LightBake::Shadowmask));
+        if (masked) {  // the plate's shadow is in it: seen and hidden texels both
+            int width = 0, height = 0, channels = 0;
+            const std::vector<uint8_t> mask = readImage8((dir / "local" / "lightmap_shadowmask.png").string(), width, height, channels);
+            REQUIRE(channels == 4);
+            int hidden = 0, seen = 0;
+            for (size_t t = 0; t < mask.size(); t += 4) {
+                if (mask[t] < 64) ++hidden;
+                else if (mask[t] > 192) ++seen;
+            }
+            CHECK(hidden > 4);
+            CHECK(seen > 4);
+        }
 
         job.outputDir = (dir / "split").string();
         const std::string work = (dir / "work").string();
