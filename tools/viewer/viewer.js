@@ -418,6 +418,12 @@ async function main() {
     report(`the lightmaps hold only the indirect light of ${engineDrawn.map(({ name }) => name).join(', ')} ` +
            `(light-bake indirect); this viewer draws the direct light of ${drawnCount} of them ` +
            '(two suns and two point or spot lights at most): image_lightmapped.exr shows all');
+  // three.js' own materials (moz_lightmap.js) show the lightmaps alone.
+  const maskedCount = (gltf.parser.json.extensions?.KHR_lights_punctual?.lights ?? [])
+    .filter((light) => light.extensions?.VOXLIGHT_light_bake?.mode === 'shadowmask').length;
+  if (threeMaterials && maskedCount > 0)
+    report(`three.js materials (moz_lightmap.js) do not draw the ${maskedCount} shadowmask light(s) the lightmaps ` +
+           'leave out: the page without ?material=three does');
   // A bake under a uniform sky writes its radiance into the scene's extras (glTF has no sky):
   // lit, the background is that sky, with the exposure and the sRGB curve the shader applies.
   const sky = world.userData?.voxlight?.sky;
