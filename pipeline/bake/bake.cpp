@@ -365,11 +365,11 @@ BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, co
                 baked.direct.pixels[3 * texel + size_t(c)] *= scale;
                 baked.indirect.pixels[3 * texel + size_t(c)] *= scale;
             }
-            if (!baked.shadowmask.empty())
-                for (size_t c = 0; c < size_t(kShadowmaskChannels); ++c) {
-                    float& seen = baked.shadowmask.pixels[size_t(kShadowmaskChannels) * texel + c];
-                    seen = std::min(1.0f, seen * scale);
-                }
+            // A shadowmask texel is a ratio over its facing samples: only a buried one changes,
+            // to be filled from its neighbours.
+            if (!baked.shadowmask.empty() && !(shown > 0.0f))
+                for (size_t c = 0; c < size_t(kShadowmaskChannels); ++c)
+                    baked.shadowmask.pixels[size_t(kShadowmaskChannels) * texel + c] = kShadowmaskUnseen;
             if (shown > 0.0f) continue;
             baked.mask.pixels[texel] = 0.0f;
             ++baked.buriedTexels;
@@ -379,7 +379,7 @@ BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, co
     // Padding texels (and buried ones) take their neighbours' values, so bilinear filtering at
     // chart edges does not bleed black.
     for (Image* image : {&baked.total, &baked.direct, &baked.indirect}) dilatePadding(*image, baked.mask);
-    if (!baked.shadowmask.empty()) dilatePadding(baked.shadowmask, baked.mask);
+    if (!baked.shadowmask.empty()) fillUnseenShadowmask(baked.shadowmask, baked.mask);
     baked.seams = finishLightmapSeams(scene, atlas.meshes, baked.mask, baked.direct, baked.indirect, baked.total,
                                       settings.lightmapStitch, &baked.shadowmask);
     return baked;

@@ -125,7 +125,8 @@ BakedImage bakeCameraImage(const ReceiverGather& gather, const ReceiverScene& tr
 // of its open samples alone, and one wholly inside is filled as padding is, so that bilinear
 // filtering beside it (a wall at a panel's foot) does not pull in black. `scene`: the one the
 // atlas was built from (its TEXCOORD_1). A `shadowmask` (ReceiverLighting::shadowmask, may be
-// empty) is scaled to its open samples, dilated and stitched as the light is.
+// empty) has its buried and unseen texels and its padding filled from their neighbours
+// (lightmap/dilate.h fillUnseenShadowmask), then is stitched as the light is.
 BakedLightmap finishLightmap(const LightmapAtlas& atlas, const Image& direct, const Image& indirect, const Image& open,
                              const Scene& scene, const BakeSettings& settings, const Image& shadowmask = Image());
 

@@ -27,7 +27,7 @@ Image shadowmaskTexels(const SurfaceSampleSet& receivers, const TraceSceneView& 
     tbb::parallel_for(tbb::blocked_range<size_t>(std::min(firstElement, elements), elements, 64),
                       [&](const tbb::blocked_range<size_t>& range) {
                           for (size_t e = range.begin(); e != range.end(); ++e) {
-                              float weight = 0.0f, seen[kShadowmaskChannels] = {};
+                              float facing[kShadowmaskChannels] = {}, seen[kShadowmaskChannels] = {};
                               for (uint32_t k = receivers.begin[e]; k < receivers.begin[e + 1]; ++k) {
                                   const SurfaceSample& r = receivers.samples[k];
                                   const vec3* v = scene.vertices + 3 * size_t(r.triangle);
@@ -36,14 +36,23 @@ Image shadowmaskTexels(const SurfaceSampleSet& receivers, const TraceSceneView& 
                                   for (uint32_t l = 0; l < scene.lightCount; ++l) {
                                       const TraceLight& light = scene.lights[l];
                                       if (light.maskChannel < 0) continue;
-                                      seen[light.maskChannel] +=
-                                          r.weight * lightVisibility(bvh, light, r.position, ng, kShadowmaskStrata, k, l);
+                                      // The cosine toward the light's centre, 0 under either horizon.
+                                      const vec3 toLight = light.type == TraceLightType::Directional
+                                                               ? -light.direction
+                                                               : glm::normalize(light.position - r.position);
+                                      const float cosine =
+                                          glm::dot(ng, toLight) > 0.0f ? glm::max(glm::dot(r.normal, toLight), 0.0f) : 0.0f;
+                                      if (!(cosine > 0.0f)) continue;
+                                      facing[light.maskChannel] += r.weight * cosine;
+                                      seen[light.maskChannel] += r.weight * cosine *
+                                          lightVisibility(bvh, light, r.position, ng, kShadowmaskStrata, k, l);
                                   }
-                                  weight += r.weight;
                               }
                               for (int c = 0; c < kShadowmaskChannels; ++c)
                                   mask.pixels[e * kShadowmaskChannels + size_t(c)] =
-                                      !used[c] ? 1.0f : weight > 0.0f ? std::min(1.0f, seen[c] / weight) : 0.0f;
+                                      !used[c]            ? 1.0f
+                                      : facing[c] > 0.0f ? std::min(1.0f, seen[c] / facing[c])
+                                                          : kShadowmaskUnseen;
                           }
                       });
     return mask;

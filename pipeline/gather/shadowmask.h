@@ -21,12 +21,18 @@ constexpr int kShadowmaskStrata = 8;
 // Whether any light of the scene has a shadowmask channel.
 bool hasShadowmaskLights(const TraceSceneView& scene);
 
-// Per texel [firstElement, lastElement) of `receivers` (the rest 0): the weighted mean over its
-// samples of lightVisibility, at each sample's point, one channel per shadowmask light. A texel's samples sit at the texel's centre on a flat surface (receivers.h), so the
-// mask is the visibility there: what bilinear reads between texel centres reconstruct. A
-// channel without a light holds 1 (opaque alpha: an importer that premultiplies alpha leaves
-// the other channels alone). Each sample seeds its strata with its index in the whole set: the
-// same bytes at any thread count and in any band of rows. Empty when no light has a channel.
+// Per texel [firstElement, lastElement) of `receivers` (the rest 0), one channel per
+// shadowmask light: the mean over its samples of lightVisibility, at each sample's point,
+// weighted by the sample's weight and its cosine to the light. The engine multiplies the mask
+// by the light's own cosine, so a sample turned away from the light has no say: at a crease
+// the side the light reaches decides. A texel none of whose samples faces the light holds
+// kShadowmaskUnseen, for finishing to fill from its neighbours (past a curved surface's
+// terminator, a 0 there would darken the lit texels beside it through the bilinear read). A
+// texel's samples sit at the texel's centre on a flat surface (receivers.h), so the mask is the
+// visibility there: what bilinear reads between texel centres reconstruct. A channel without a
+// light holds 1 (opaque alpha: an importer that premultiplies alpha leaves the other channels
+// alone). Each sample seeds its strata with its index in the whole set: the same bytes at any
+// thread count and in any band of rows. Empty when no light has a channel.
 Image shadowmaskTexels(const SurfaceSampleSet& receivers, const TraceSceneView& scene, const BvhView& bvh,
                        size_t firstElement = 0, size_t lastElement = SIZE_MAX);
 

@@ -73,4 +73,22 @@ size_t dilatePadding(Image& image, const Image& mask, int passes) {
     return total;
 }
 
+void fillUnseenShadowmask(Image& shadowmask, const Image& mask) {
+    const size_t texels = size_t(shadowmask.width) * size_t(shadowmask.height);
+    const size_t channels = size_t(shadowmask.channels);
+    for (size_t c = 0; c < channels; ++c) {
+        Image channel(shadowmask.width, shadowmask.height, 1), known(shadowmask.width, shadowmask.height, 1);
+        bool any = false;
+        for (size_t t = 0; t < texels; ++t) {
+            const float v = shadowmask.pixels[t * channels + c];
+            channel.pixels[t] = v;
+            known.pixels[t] = mask.pixels[t * size_t(mask.channels)] > 0.5f && v >= 0.0f ? 1.0f : 0.0f;
+            any = any || known.pixels[t] > 0.5f;
+        }
+        if (any) dilatePadding(channel, known);
+        for (size_t t = 0; t < texels; ++t)
+            shadowmask.pixels[t * channels + c] = any && channel.pixels[t] >= 0.0f ? channel.pixels[t] : 1.0f;
+    }
+}
+
 }  // namespace vl

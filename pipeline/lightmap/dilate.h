@@ -12,4 +12,11 @@ namespace vl {
 // is left. Returns the number of texels filled.
 size_t dilatePadding(Image& image, const Image& mask, int passes = -1);
 
+// A shadowmask (gather/shadowmask.h, RGBA) finished as a lightmap's padding is, channel by
+// channel: every texel that is padding (mask ≤ 0.5) or holds a negative value (scene.h
+// kShadowmaskUnseen) takes its neighbours' values by dilatePadding, from the covered texels
+// that hold a value. A channel with no such texel anywhere is 1 (no texel faces its light:
+// nothing for it to shadow).
+void fillUnseenShadowmask(Image& shadowmask, const Image& mask);
+
 }  // namespace vl

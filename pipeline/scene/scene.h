@@ -122,6 +122,9 @@ bool parseLightBake(const std::string& name, LightBake& mode);
 
 // A shadowmask image is RGBA: one channel per shadowmask light, four at most (as Unity's).
 constexpr int kShadowmaskChannels = 4;
+// A shadowmask texel none of whose samples faces its light, before it is filled from its
+// neighbours (lightmap/dilate.h fillUnseenShadowmask).
+constexpr float kShadowmaskUnseen = -1.0f;
 
 // glTF punctual intensities are photometric (cd, lx); Blender's exporter multiplies watts
 // per steradian by 683 lm/W, so dividing by it gives back radiometric units (DESIGN.md). The
