@@ -15,7 +15,7 @@ namespace vl {
 
 // n: a sun's penumbra takes n × n stratified directions over its disk (lighting/direct_light.h
 // lightVisibility). 8: 64 directions, a step of 1/64 where an 8-bit channel steps 1/255, so the
-// strata, not the bytes, set the mask's error (under 2% of the disk, `test_bake "A shadowmask*"`).
+// strata, not the bytes, set the mask's error (docs/light-bake-modes.md, "Tests").
 constexpr int kShadowmaskStrata = 8;
 
 // Whether any light of the scene has a shadowmask channel.

@@ -13,7 +13,7 @@
 //   // fragment shader: PUNCTUAL_GLSL, LAMP_SHADOW_GLSL, then
 //   //   light += drawnLampLight(worldPosition, geometricNormal, shadingNormal);
 import * as THREE from 'three';
-import { bakedLights, packLight } from './punctual.js';
+import { bakedLights, packLights } from './punctual.js';
 
 export const MAX_DRAWN_LAMPS = 2;
 
@@ -57,21 +57,13 @@ export class LampShadowMaps {
       camera.updateMatrixWorld(true);
       return { target, camera };
     });
-    const vectors = () => Array.from({ length: MAX_DRAWN_LAMPS }, () => new THREE.Vector4());
-    const color = vectors(), position = vectors(), direction = vectors(), shape = vectors();
-    lamps.forEach((lamp, k) => {
-      const packed = packLight(lamp);
-      color[k].copy(packed.color);
-      position[k].copy(packed.position);
-      direction[k].copy(packed.direction);
-      shape[k].copy(packed.shape);
-    });
+    const packed = packLights(lamps, MAX_DRAWN_LAMPS);
     this.uniforms = {
       drawnLampCount: { value: lamps.length },
-      drawnLampColor: { value: color },
-      drawnLampPosition: { value: position },
-      drawnLampDirection: { value: direction },
-      drawnLampShape: { value: shape },
+      drawnLampColor: { value: packed.color },
+      drawnLampPosition: { value: packed.position },
+      drawnLampDirection: { value: packed.direction },
+      drawnLampShape: { value: packed.shape },
       drawnLampMap0: { value: this.maps[0]?.target.texture ?? null },
       drawnLampMap1: { value: this.maps[1]?.target.texture ?? null },
       drawnLampTexelAngle: { value: (Math.PI / 2) / size },

@@ -46,14 +46,18 @@ export function bakedLights(gltf, wanted) {
   return lights;
 }
 
-// A light packed for PUNCTUAL_GLSL: four vec4s (see there).
-export function packLight(light, extra = 0) {
-  return {
-    color: new THREE.Vector4(light.color.x, light.color.y, light.color.z, light.type),
-    position: new THREE.Vector4(light.position.x, light.position.y, light.position.z, light.range),
-    direction: new THREE.Vector4(light.direction.x, light.direction.y, light.direction.z, 0),
-    shape: new THREE.Vector4(light.spotScale, light.spotOffset, extra, 0),
-  };
+// `lights` packed for PUNCTUAL_GLSL as uniform arrays of `length` vec4s each (see there), the
+// rest zero; `extra(light)` goes into shape.z.
+export function packLights(lights, length, extra = () => 0) {
+  const vectors = () => Array.from({ length }, () => new THREE.Vector4());
+  const packed = { color: vectors(), position: vectors(), direction: vectors(), shape: vectors() };
+  lights.slice(0, length).forEach((light, k) => {
+    packed.color[k].set(light.color.x, light.color.y, light.color.z, light.type);
+    packed.position[k].set(light.position.x, light.position.y, light.position.z, light.range);
+    packed.direction[k].set(light.direction.x, light.direction.y, light.direction.z, 0);
+    packed.shape[k].set(light.spotScale, light.spotOffset, extra(light), 0);
+  });
+  return packed;
 }
 
 // E·cos θ of one light at p (normals unit, world space, on the side the camera sees), no

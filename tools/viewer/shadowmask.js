@@ -16,8 +16,7 @@
 //
 // maskTexture: the VOXLIGHT_shadowmask texture with colorSpace NoColorSpace, flipY false,
 // NearestFilter and no mipmaps (the chunk filters it itself).
-import * as THREE from 'three';
-import { bakedLights, packLight } from './punctual.js';
+import { bakedLights, packLights } from './punctual.js';
 
 export const MAX_SHADOWMASK_LIGHTS = 4;
 
@@ -32,22 +31,14 @@ export function shadowmaskLights(gltf) {
 
 // The chunk's uniforms for `lights` (shadowmaskLights) and a material's shadowmask texture.
 export function shadowmaskUniforms(lights, texture) {
-  const vectors = () => Array.from({ length: MAX_SHADOWMASK_LIGHTS }, () => new THREE.Vector4());
-  const color = vectors(), position = vectors(), direction = vectors(), shape = vectors();
-  lights.forEach((light, k) => {
-    const packed = packLight(light, light.channel);
-    color[k].copy(packed.color);
-    position[k].copy(packed.position);
-    direction[k].copy(packed.direction);
-    shape[k].copy(packed.shape);
-  });
+  const packed = packLights(lights, MAX_SHADOWMASK_LIGHTS, (light) => light.channel);
   return {
     shadowMask: { value: texture },
     maskLightCount: { value: texture ? lights.length : 0 },
-    maskLightColor: { value: color },
-    maskLightPosition: { value: position },
-    maskLightDirection: { value: direction },
-    maskLightShape: { value: shape },
+    maskLightColor: { value: packed.color },
+    maskLightPosition: { value: packed.position },
+    maskLightDirection: { value: packed.direction },
+    maskLightShape: { value: packed.shape },
   };
 }
 

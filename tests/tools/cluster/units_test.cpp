@@ -37,6 +37,16 @@ BakeJob tinyBoxJob(const fs::path& root) {
     return job;
 }
 
+// Runs the voxel unit and every receiver unit of `units` in this process, then the merge; its report.
+BakeReport runUnitsAndMerge(const BakeJob& job, const std::string& work, const SceneUnits& units) {
+    REQUIRE(runVoxelUnit(job, work).ok);
+    for (int r = 0; r < units.receiverCount(); ++r) REQUIRE(runReceiverUnit(job, work, units, r).ok);
+    const BakeReport merged = mergeScene(job, work, units);
+    INFO(merged.error);
+    REQUIRE(merged.ok);
+    return merged;
+}
+
 }  // namespace
 
 
@@ -96,12 +106,7 @@ TEST_CASE("A scene whose lightmaps have no mesh to bake merges as its local bake
     REQUIRE(local.ok);
     job.outputDir = (root / "split").string();
     const std::string work = (root / "work").string();
-    const SceneUnits units = planSceneUnits(job, 2);
-    REQUIRE(runVoxelUnit(job, work).ok);
-    for (int r = 0; r < units.receiverCount(); ++r) REQUIRE(runReceiverUnit(job, work, units, r).ok);
-    const BakeReport merged = mergeScene(job, work, units);
-    INFO(merged.error);
-    REQUIRE(merged.ok);
+    const BakeReport merged = runUnitsAndMerge(job, work, planSceneUnits(job, 2));
     CHECK(merged.files == local.files);
     test::checkSameOutputs(root / "local", root / "split", local.files);
 }
@@ -175,11 +180,7 @@ TEST_CASE("A lightmap whose seams are stitched merges as its local bake, its sha
         const std::string work = (dir / "work").string();
         const SceneUnits units = planSceneUnits(job, 3);
         REQUIRE(units.atlases.size() == 1);
-        REQUIRE(runVoxelUnit(job, work).ok);
-        for (int r = 0; r < units.receiverCount(); ++r) REQUIRE(runReceiverUnit(job, work, units, r).ok);
-        const BakeReport merged = mergeScene(job, work, units);
-        INFO(merged.error);
-        REQUIRE(merged.ok);
+        const BakeReport merged = runUnitsAndMerge(job, work, units);
         CHECK(merged.files == local.files);
         test::checkSameOutputs(dir / "local", dir / "split", local.files);
     }
