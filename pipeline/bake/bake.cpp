@@ -402,6 +402,30 @@ void addLightmapImages(const Scene& scene, const ReceiverScene& tracing, const B
     }
 }
 
+double irradianceVolumeSpacing(const Scene& scene, const BakeSettings& settings) {
+    if (!lightsVolume(settings) || settings.irradianceVolume.spacing == 0.0) return 0.0;
+    if (settings.irradianceVolume.spacing > 0.0) return settings.irradianceVolume.spacing;
+    Aabb box;
+    for (const Mesh& mesh : scene.meshes)
+        for (const vec3& p : mesh.positions) box.extend(p);
+    if (box.empty()) return 0.0;
+    const vec3 size = box.extent();
+    const double volume = double(std::max(size.x, 0.01f)) * double(std::max(size.y, 0.01f)) * double(std::max(size.z, 0.01f));
+    const double longest = double(std::max({size.x, size.y, size.z}));
+    return std::max(std::min(kAutoVolumeSpacing, longest / kAutoVolumeProbesAlong), std::cbrt(volume / kAutoVolumeProbes));
+}
+
+void addIrradianceVolume(const Scene& scene, const ReceiverScene& tracing, const ReceiverGather& gather,
+                         const BakeSettings& settings, BakeResult& result) {
+    IrradianceVolumeSettings volume = settings.irradianceVolume;
+    volume.spacing = irradianceVolumeSpacing(scene, settings);
+    if (!(volume.spacing > 0.0)) return;
+    timed(result.stages, "irradiance volume", [&] {
+        result.volume = bakeIrradianceVolume(scene, tracing, gather, volume, settings.quiet);
+        return 0;
+    });
+}
+
 BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnostics) {
     VoxelStages stages = bakeVoxelStages(scene, settings, diagnostics);
     BakeResult& result = stages.result;
@@ -428,6 +452,7 @@ BakeResult bake(Scene scene, const BakeSettings& settings, Diagnostics& diagnost
             addLightmapImages(scene, *stages.tracing, settings, result);
             return 0;
         });
+    addIrradianceVolume(scene, *stages.tracing, receivers, settings, result);
     result.mips = std::move(stages.indirect.mips);
     return std::move(result);
 }

@@ -14,6 +14,7 @@
 #include "gather/gather.h"
 #include "lightmap/lightmap_image.h"
 #include "lightmap/lightmap_seams.h"
+#include "probes/irradiance_volume.h"
 #include "receivers/receiver_scene.h"
 #include "receivers/receivers.h"
 #include "scene/scene.h"
@@ -61,6 +62,7 @@ struct BakeResult {
     GatherVisibilityChoice gatherVisibility;  // rays or cones, and why (gather/ray_gather.h)
     std::optional<LightmapUvReport> lightmapUvs;  // when the bake generated TEXCOORD_1 (unwrap/lightmap_uvs.h)
     std::vector<GeneratedLayout> generatedLayouts;  // then, per scene mesh: what glTF out writes
+    IrradianceVolume volume;  // the probes scene.glb carries (probes/irradiance_volume.h); empty: none
 };
 
 // The bake runs in two halves: the voxel stages, once per scene, and the receivers (each
@@ -113,6 +115,21 @@ Image bakeLightmapImage(const TraceScene& trace, const Bvh& bvh, const CameraMod
 // device they resolved to. `tracing` and `light` are read, not copied: they must outlive it.
 ReceiverGather bakeReceiverGather(const ReceiverScene& tracing, const IndirectLight& light, const BakeSettings& settings,
                                   bool onGpu);
+
+// Auto spacing of the irradiance volume: this, finer where the scene's longest side would hold
+// fewer than kAutoVolumeProbesAlong probes (a model on a table), and coarser where more than
+// kAutoVolumeProbes would cover its bounds (a hall, a level), so the probes cost about what a
+// room's do.
+constexpr double kAutoVolumeSpacing = 0.5;  // metres
+constexpr double kAutoVolumeProbesAlong = 8.0;
+constexpr double kAutoVolumeProbes = 32768.0;
+// The spacing settings.irradianceVolume asks for on `scene` (auto resolved); 0: no volume,
+// also where the bake cannot light one (bake_settings.h lightsVolume).
+double irradianceVolumeSpacing(const Scene& scene, const BakeSettings& settings);
+
+// The irradiance volume of a baked scene into result.volume, timed as "irradiance volume".
+void addIrradianceVolume(const Scene& scene, const ReceiverScene& tracing, const ReceiverGather& gather,
+                         const BakeSettings& settings, BakeResult& result);
 
 // A camera's image as the bake renders it: its receivers (bakeCameraReceivers) lit by `gather`.
 BakedImage bakeCameraImage(const ReceiverGather& gather, const ReceiverScene& tracing, const Camera& camera,

@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <optional>
 #include <cerrno>
 #include <cstring>
 #include <fcntl.h>
@@ -106,6 +107,10 @@ nlohmann::json reportJson(const BakeReport& report, const BakeSettings& settings
     json["mip_levels"] = report.mipLevels;
     json["gather_points"] = report.gatherPoints;
     json["bright_patches"] = report.brightPatches;
+    if (report.volumeProbes.x > 0)
+        json["irradiance_volume"] = {{"probes", {report.volumeProbes.x, report.volumeProbes.y, report.volumeProbes.z}},
+                                     {"spacing_metres", report.volumeSpacing},
+                                     {"valid_probes", report.volumeValidProbes}};
     json["gather_visibility"] = toString(report.gatherVisibility.visibility);
     json["gather_visibility_set_by"] = report.gatherVisibility.setBy;
     if (report.lightmapUvs) {
@@ -252,6 +257,11 @@ void writeBakeFiles(const BakeJob& job, BakeResult& result, const ExportSource& 
     report.voxelSizeChoice = result.voxelSizeChoice;
     report.gatherPoints = result.gatherPoints;
     report.brightPatches = result.brightPatches;
+    if (!result.volume.empty()) {
+        report.volumeProbes = result.volume.counts;
+        report.volumeSpacing = result.volume.spacing.x;
+        report.volumeValidProbes = size_t(std::count(result.volume.valid.begin(), result.volume.valid.end(), uint8_t(1)));
+    }
     report.gatherVisibility = result.gatherVisibility;
     report.lightmapUvs = result.lightmapUvs;
 
@@ -307,9 +317,11 @@ void writeBakeFiles(const BakeJob& job, BakeResult& result, const ExportSource& 
                 const BakedLightmap& lightmap = result.lightmaps[l];
                 lightmaps.push_back({lightmap.name, lightmap.meshes, encodeRgbm(lightmap.total), shadowmasks[l]});
             }
+            std::optional<ExportedIrradianceVolume> volume;
+            if (!result.volume.empty()) volume = encodeIrradianceVolume(result.volume);
             writeLightmappedGlb(source.sourcePath, source.meshSources, result.generatedLayouts, lightmaps,
                                 job.addedCameras, p, diagnostics, source.viewerSky, job.addedLights, settings.lightBake,
-                                source.lights);
+                                source.lights, volume ? &*volume : nullptr);
         });
     files.writeAll();
     report.stages.push_back({"write", std::chrono::duration<double>(std::chrono::steady_clock::now() - writeStart).count()});

@@ -41,6 +41,10 @@ struct BakeReport {
     size_t mipLevels = 0;
     size_t gatherPoints = 0;
     size_t brightPatches = 0;
+    // The irradiance volume's probes along x, y, z (zero: none), its spacing and how many lie in open space.
+    glm::ivec3 volumeProbes{0};
+    double volumeSpacing = 0.0;
+    size_t volumeValidProbes = 0;
     GatherVisibilityChoice gatherVisibility;  // rays or cones, and why
     std::optional<LightmapUvReport> lightmapUvs;  // when the bake generated TEXCOORD_1
     size_t lightmapTexels = 0;

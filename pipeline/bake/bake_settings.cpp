@@ -109,6 +109,12 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
              if (!parseLightBake(v, s.lightBake))
                  throw SettingsError("setting light-bake = '" + v + "' is not one of all, indirect, shadowmask");
          }},
+        {"irradiance-volume", "metres between the probes of the irradiance volume scene.glb carries, which lights what moves through the scene (docs/irradiance-volume.md); off: none; auto: 0.5 m, finer where the scene's longest side would hold fewer than 8 probes, coarser where more than 32768 would cover it (default auto)",
+         [](S& s, const std::string& v) {
+             if (v == "auto") s.irradianceVolume.spacing = -1.0;
+             else if (v == "off") s.irradianceVolume.spacing = 0.0;
+             else s.irradianceVolume.spacing = parseRealSetting("irradiance-volume", v, 0.001, 1e6);
+         }},
         {"lightmap-gather", "where lightmaps gather their indirect light: texels (records on the atlas's own texels) or points (the voxel gather points images use); texels needs gather-visibility rays (default texels)",
          [](S& s, const std::string& v) {
              if (v != "texels" && v != "points")
@@ -233,6 +239,10 @@ const SettingsTable<BakeSettings>& bakeSettingsTable() {
     return table;
 }
 
+bool lightsVolume(const BakeSettings& s) {
+    return s.outputs.gltf && s.gather.gatherLevel >= 0 && (s.outputs.lightmaps || s.outputs.images);
+}
+
 void validateBakeSettings(const BakeSettings& s) {
     s.lightmap.validate();
     if (s.voxel.resolution < 0)  // 0: chosen from the scene
@@ -240,6 +250,10 @@ void validateBakeSettings(const BakeSettings& s) {
     if (s.voxel.voxelSize < 0.0 || !std::isfinite(s.voxel.voxelSize))
         throw SettingsError("setting voxel-size = " + numberText(s.voxel.voxelSize) + " must be positive and finite");
     validateGatherSettings(s.gather);
+    if (s.irradianceVolume.spacing > 0.0 && !lightsVolume(s))
+        throw SettingsError("setting irradiance-volume = " + numberText(s.irradianceVolume.spacing) +
+                            " needs the final gather the lightmaps and images read (gather-level 0 or more, and "
+                            "lightmaps or images on): give irradiance-volume off");
     if (s.direct.emitterStrata < 1 || s.direct.emitterStrata > 64)
         throw SettingsError("setting emitter-strata = " + std::to_string(s.direct.emitterStrata) + " is outside 1..64");
     if (s.direct.skyStrata < 1 || s.direct.skyStrata > 64)
@@ -293,6 +307,8 @@ std::string describeBakeSettings(const BakeSettings& s) {
     if (!s.generateLightmapUvs) out << ", lightmap-uvs=false";
     if (s.lambertMaterials) out << ", materials=lambert";
     if (s.lightBake != LightBake::All) out << ", light-bake=" << lightBakeName(s.lightBake);
+    if (s.irradianceVolume.spacing == 0.0) out << ", irradiance-volume=off";
+    else if (s.irradianceVolume.spacing > 0.0) out << ", irradiance-volume=" << numberText(s.irradianceVolume.spacing);
     if (s.lightmapSide != LightmapSide::Inside) out << ", lightmap-side=" << toString(s.lightmapSide);
     if (!s.lightmapStitch) out << ", lightmap-stitch=false";
     if (!s.gather.lightmapGradients) out << ", lightmap-gradients=false";

@@ -10,6 +10,7 @@
 #include "cone/cone_settings.h"
 #include "cuda/device_choice.h"
 #include "lighting/lighting.h"
+#include "probes/irradiance_volume.h"
 #include "voxel/voxel_scene.h"
 
 #include <string>
@@ -59,6 +60,9 @@ struct BakeSettings {
     // own hit: the pixel's box, as the references filter theirs (lightmap/lightmap_image.h).
     int lightmapImageSubsamples = 4;
     BakeOutputs outputs;
+    // The irradiance volume scene.glb carries (probes/irradiance_volume.h): its spacing in
+    // metres; 0: none; negative: auto (bake.h irradianceVolumeSpacing).
+    IrradianceVolumeSettings irradianceVolume{-1.0};
     // TEXCOORD_1 for scenes that have none (unwrap/lightmap_uvs.h; bake.cpp needsLightmapUvs).
     bool generateLightmapUvs = true;
     // Every material as Lambert (metallic 0, no transmission, its base colour), for the bake and
@@ -77,6 +81,10 @@ struct BakeSettings {
 };
 
 const SettingsTable<BakeSettings>& bakeSettingsTable();
+
+// Whether the bake can light an irradiance volume: its probes read the final gather (gather/
+// gather.h ReceiverGather::openPoints), and scene.glb carries them.
+bool lightsVolume(const BakeSettings& settings);
 
 // Checks every range (SettingsError naming the setting); runs before any work.
 void validateBakeSettings(const BakeSettings& settings);

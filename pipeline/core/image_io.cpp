@@ -118,6 +118,24 @@ std::vector<uint8_t> encodePng8(int width, int height, int channels, const std::
     return png;
 }
 
+std::vector<uint8_t> decodeImage8(const std::vector<uint8_t>& bytes, const std::string& what, int& width, int& height,
+                                  int& channels) {
+    OIIO::Filesystem::IOMemReader memory(const_cast<uint8_t*>(bytes.data()), bytes.size());
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    auto in = OIIO::ImageInput::create("png");
+    OIIO::ImageSpec spec;
+    if (!in || !in->set_ioproxy(&memory) || !in->open("memory.png", spec, config))
+        throw InputError("cannot decode " + what + ": " + (in ? in->geterror() : OIIO::geterror()));
+    width = spec.width;
+    height = spec.height;
+    channels = spec.nchannels;
+    std::vector<uint8_t> texels(static_cast<size_t>(width) * static_cast<size_t>(height) * static_cast<size_t>(channels));
+    if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, texels.data()))
+        throw InputError("cannot decode " + what + ": " + in->geterror());
+    return texels;
+}
+
 std::vector<uint8_t> readImage8(const std::string& path, int& width, int& height, int& channels) {
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);

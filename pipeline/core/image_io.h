@@ -23,6 +23,10 @@ Image readLinearImage(const std::string& path);
 // given: no sRGB curve, alpha not associated (an encoding that keeps colour under a small
 // alpha, RGBM, needs both). Error when it cannot be encoded.
 std::vector<uint8_t> encodePng8(int width, int height, int channels, const std::vector<uint8_t>& texels);
+// The 8-bit texels of an encoded image in memory (PNG, JPEG) as stored; InputError naming
+// `what` when it does not decode.
+std::vector<uint8_t> decodeImage8(const std::vector<uint8_t>& bytes, const std::string& what, int& width, int& height,
+                                  int& channels);
 // The 8-bit texels of an image file as stored (alpha not associated, no curve applied);
 // InputError naming the path.
 std::vector<uint8_t> readImage8(const std::string& path, int& width, int& height, int& channels);

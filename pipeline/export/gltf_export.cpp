@@ -457,14 +457,134 @@ void addLightBakes(tinygltf::Model& model, const std::vector<Light>& addedLights
         std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), kLightBakeExtension) == model.extensionsUsed.end())
         model.extensionsUsed.push_back(kLightBakeExtension);
 }
+constexpr const char* kVolumeExtension = "VOXLIGHT_irradiance_volume";
+
+// The volume's images (PNG, no texture: a probe is not read through a sampler) and its extension.
+void addIrradianceVolume(tinygltf::Model& model, BinaryBuffer& bin, const ExportedIrradianceVolume& volume) {
+    const int width = volume.counts.x, height = volume.counts.y * volume.counts.z;
+    const size_t probes = size_t(width) * size_t(height);
+    if (volume.mean.width != width || volume.mean.height != height || volume.valid.size() != probes)
+        throw Error("writeLightmappedGlb: the irradiance volume's images are not its probes' count");
+    const auto addImage = [&](const std::string& name, const std::vector<uint8_t>& png) {
+        tinygltf::Image image;
+        image.name = name;
+        image.mimeType = "image/png";
+        image.bufferView = bin.addView(model, png.data(), png.size());
+        model.images.push_back(image);
+        return tinygltf::Value(int(model.images.size()) - 1);
+    };
+    const auto triple = [](const auto& v) {
+        return tinygltf::Value(tinygltf::Value::Array{tinygltf::Value(double(v.x)), tinygltf::Value(double(v.y)),
+                                                      tinygltf::Value(double(v.z))});
+    };
+    tinygltf::Value::Object ext;
+    ext["origin"] = triple(volume.origin);
+    ext["spacing"] = triple(volume.spacing);
+    ext["counts"] = tinygltf::Value(tinygltf::Value::Array{tinygltf::Value(volume.counts.x), tinygltf::Value(volume.counts.y),
+                                                           tinygltf::Value(volume.counts.z)});
+    ext["irradiance"] = addImage("irradiance volume: mean", rgbmPng(volume.mean));
+    ext["range"] = tinygltf::Value(double(volume.mean.range));
+    tinygltf::Value::Array gradient;
+    const char* axes[] = {"x", "y", "z"};
+    for (size_t axis = 0; axis < 3; ++axis) {
+        if (volume.gradient[axis].size() != 3 * probes)
+            throw Error("writeLightmappedGlb: the irradiance volume's gradient is not its probes' count");
+        gradient.push_back(addImage(std::string("irradiance volume: gradient ") + axes[axis],
+                                    encodePng8(width, height, 3, volume.gradient[axis])));
+    }
+    ext["gradient"] = tinygltf::Value(gradient);
+    ext["valid"] = addImage("irradiance volume: valid", encodePng8(width, height, 1, volume.valid));
+    if (!volume.suns.empty()) {
+        if (volume.sunVisibility.size() != 4 * probes)
+            throw Error("writeLightmappedGlb: the irradiance volume's sun visibility is not its probes' count");
+        tinygltf::Value::Array suns;
+        for (const ExportedIrradianceVolume::Sun& sun : volume.suns) {
+            tinygltf::Value::Object entry;
+            entry["direction"] = triple(sun.direction);
+            entry["irradiance"] = triple(sun.irradiance);
+            suns.push_back(tinygltf::Value(entry));
+        }
+        ext["suns"] = tinygltf::Value(suns);
+        ext["sunVisibility"] = addImage("irradiance volume: sun visibility", encodePng8(width, height, 4, volume.sunVisibility));
+    }
+    model.extensions[kVolumeExtension] = tinygltf::Value(ext);
+    if (std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), kVolumeExtension) == model.extensionsUsed.end())
+        model.extensionsUsed.push_back(kVolumeExtension);
+}
 
 }  // namespace
+
+ExportedIrradianceVolume readIrradianceVolume(const std::string& path) {
+    tinygltf::Model model;
+    gltf::EncodedImages encoded;
+    readGltfModel(path, model, encoded, true);
+    const auto found = model.extensions.find(kVolumeExtension);
+    if (found == model.extensions.end()) throw InputError(path + ": no " + kVolumeExtension);
+    const tinygltf::Value& ext = found->second;
+    const std::string where = path + ": " + kVolumeExtension;
+    const auto number = [&](const tinygltf::Value& v, const std::string& key) {
+        if (!v.IsNumber()) throw InputError(where + ": " + key + " is not a number");
+        return v.GetNumberAsDouble();
+    };
+    const auto triple = [&](const std::string& key) {
+        const tinygltf::Value& v = ext.Get(key);
+        if (!v.IsArray() || v.ArrayLen() != 3) throw InputError(where + ": " + key + " is not three numbers");
+        return glm::dvec3(number(v.Get(0), key), number(v.Get(1), key), number(v.Get(2), key));
+    };
+    ExportedIrradianceVolume volume;
+    volume.origin = triple("origin");
+    volume.spacing = triple("spacing");
+    const glm::dvec3 counts = triple("counts");
+    volume.counts = glm::ivec3(counts);
+    if (glm::dvec3(volume.counts) != counts || volume.counts.x < 1 || volume.counts.y < 1 || volume.counts.z < 1)
+        throw InputError(where + ": counts are not whole numbers of at least 1");
+    const int width = volume.counts.x, height = volume.counts.y * volume.counts.z;
+    const auto image = [&](const tinygltf::Value& index, const std::string& key, int channels) {
+        const double i = number(index, key);
+        if (!(i >= 0.0) || i >= double(model.images.size()) || model.images[size_t(i)].bufferView < 0)
+            throw InputError(where + ": " + key + " names no image of the file");
+        const auto [bytes, size] = gltf::bufferViewBytes(model, model.images[size_t(i)].bufferView, where + ": " + key);
+        int w = 0, h = 0, c = 0;
+        std::vector<uint8_t> texels = decodeImage8(std::vector<uint8_t>(bytes, bytes + size), where + ": " + key, w, h, c);
+        if (w != width || h != height || c < channels)
+            throw InputError(where + ": " + key + " is " + std::to_string(w) + " x " + std::to_string(h) + " x " +
+                             std::to_string(c) + ", not " + std::to_string(width) + " x " + std::to_string(height) +
+                             " x " + std::to_string(channels));
+        std::vector<uint8_t> out(size_t(width) * size_t(height) * size_t(channels));
+        for (size_t p = 0; p < size_t(width) * size_t(height); ++p)
+            for (int k = 0; k < channels; ++k) out[p * size_t(channels) + size_t(k)] = texels[p * size_t(c) + size_t(k)];
+        return out;
+    };
+    volume.mean.width = width;
+    volume.mean.height = height;
+    volume.mean.range = float(number(ext.Get("range"), "range"));
+    volume.mean.rgba = image(ext.Get("irradiance"), "irradiance", 4);
+    const tinygltf::Value& gradient = ext.Get("gradient");
+    if (!gradient.IsArray() || gradient.ArrayLen() != 3) throw InputError(where + ": gradient is not three images");
+    for (int axis = 0; axis < 3; ++axis) volume.gradient[size_t(axis)] = image(gradient.Get(axis), "gradient", 3);
+    volume.valid = image(ext.Get("valid"), "valid", 1);
+    const tinygltf::Value& suns = ext.Get("suns");
+    if (suns.IsArray()) {
+        if (suns.ArrayLen() > 4) throw InputError(where + ": more than four suns");
+        for (size_t s = 0; s < suns.ArrayLen(); ++s) {
+            const tinygltf::Value& sun = suns.Get(int(s));
+            const auto vector = [&](const std::string& key) {
+                const tinygltf::Value& v = sun.Get(key);
+                if (!v.IsArray() || v.ArrayLen() != 3) throw InputError(where + ": suns[" + std::to_string(s) + "]." + key + " is not three numbers");
+                return vec3(float(number(v.Get(0), key)), float(number(v.Get(1), key)), float(number(v.Get(2), key)));
+            };
+            volume.suns.push_back({vector("direction"), vector("irradiance")});
+        }
+        volume.sunVisibility = image(ext.Get("sunVisibility"), "sunVisibility", 4);
+    }
+    return volume;
+}
 
 void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Source>& meshes,
                          const std::vector<GeneratedLayout>& layouts, const std::vector<ExportedLightmap>& lightmaps,
                          const std::vector<Camera>& addedCameras, const std::string& path, Diagnostics& diagnostics,
                          const vec3& sky, const std::vector<Light>& addedLights, LightBake lightBake,
-                         const std::vector<Light>& bakedLights) {
+                         const std::vector<Light>& bakedLights, const ExportedIrradianceVolume* volume) {
     if (!layouts.empty() && layouts.size() != meshes.size())
         throw Error("writeLightmappedGlb: " + std::to_string(layouts.size()) + " layouts for " +
                     std::to_string(meshes.size()) + " meshes");
@@ -482,6 +602,11 @@ void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Sour
     addCameras(model, addedCameras);
     addLightBakes(model, addedLights, lightBake, bakedLights);
     giveFarPlanes(model);
+    // A scene.glb baked again: its old volume is not this bake's.
+    model.extensions.erase(kVolumeExtension);
+    model.extensionsUsed.erase(std::remove(model.extensionsUsed.begin(), model.extensionsUsed.end(), kVolumeExtension),
+                               model.extensionsUsed.end());
+    if (volume) addIrradianceVolume(model, bin, *volume);
 
     if (maxComponent(sky) > 0.0f && !model.scenes.empty()) {
         tinygltf::Scene& shown = model.scenes[size_t(std::max(model.defaultScene, 0))];

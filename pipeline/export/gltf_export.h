@@ -17,6 +17,7 @@
 #include "export/lightmap_encoding.h"
 #include "scene/scene.h"
 
+#include <array>
 #include <string>
 #include <utility>
 #include <vector>
@@ -46,6 +47,30 @@ struct ExportedLightmap {
           shadowmask(std::move(shadowmask_)) {}
 };
 
+// An irradiance volume as scene.glb carries it (VOXLIGHT_irradiance_volume at the file's top,
+// docs/irradiance-volume.md): every image counts.x wide and counts.y · counts.z tall, probe
+// (i, j, k) at column i, row j·counts.z + k. `mean`: A (E/π) in RGBM; `gradient` per world axis
+// 8-bit linear RGB, B/A per channel as 2 · (code − 127) / 127 (127: none); `valid` 8-bit grey, 255 open.
+struct ExportedIrradianceVolume {
+    glm::dvec3 origin{0.0}, spacing{0.0};
+    glm::ivec3 counts{0};
+    RgbmImage mean;
+    std::array<std::vector<uint8_t>, 3> gradient;  // RGB, 3 bytes a probe
+    std::vector<uint8_t> valid;                    // 1 byte a probe
+    // Suns kept apart (probes/irradiance_volume.h kVolumeSuns): direction of travel (world,
+    // unit) and E/π facing it; their visibility per probe, RGBA (channel s: sun s; 255 = 1).
+    struct Sun {
+        vec3 direction{0.0f, -1.0f, 0.0f};
+        vec3 irradiance{0.0f};
+    };
+    std::vector<Sun> suns;
+    std::vector<uint8_t> sunVisibility;  // 4 bytes a probe; empty without suns
+};
+
+// The irradiance volume a scene.glb carries; InputError naming the file and what is wrong
+// (no volume, an image missing or not its size).
+ExportedIrradianceVolume readIrradianceVolume(const std::string& path);
+
 // Writes `path` (atomically) from the glTF file `source` re-read; `meshes` are the scene's
 // meshes as loaded from it (Scene::meshes' sources, by the indices the lightmaps use).
 // `layouts`, when not empty, holds one per mesh: the generated TEXCOORD_1 to write (a mesh
@@ -67,10 +92,12 @@ struct ExportedLightmap {
 // space) that the engine draws (indirect, shadowmask) become lights at the scene's root.
 // A lightmap's shadowmask becomes a texture that each of its materials points at through
 // VOXLIGHT_shadowmask {"index", "texCoord": 1}.
+// `volume`, when given, replaces any irradiance volume the source carried.
 void writeLightmappedGlb(const std::string& source, const std::vector<Mesh::Source>& meshes,
                          const std::vector<GeneratedLayout>& layouts, const std::vector<ExportedLightmap>& lightmaps,
                          const std::vector<Camera>& addedCameras, const std::string& path, Diagnostics& diagnostics,
                          const vec3& sky = vec3(0.0f), const std::vector<Light>& addedLights = {},
-                         LightBake lightBake = LightBake::All, const std::vector<Light>& bakedLights = {});
+                         LightBake lightBake = LightBake::All, const std::vector<Light>& bakedLights = {},
+                         const ExportedIrradianceVolume* volume = nullptr);
 
 }  // namespace vl

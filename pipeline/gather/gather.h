@@ -78,6 +78,16 @@ public:
     // Lightmaps gather in their own texel space: the setting's choice, where the final gather
     // went by rays on the CPU.
     bool texelGather() const;
+    // Points in open space (an irradiance volume's probes, probes/irradiance_volume.h), each
+    // lit as a surface facing each of `normals` (unit, the scene's local frame) would be: per
+    // point, normal after normal, E (W/m²) of all the light a lightmap texel holds but the
+    // punctual lights' direct light, which the caller takes exactly. Its indirect light and
+    // sky by a fan of raysPerAxis² rays as a lightmap's records gather them (gather/ray_gather.h,
+    // the near field and the lights at hits included), its bright patches' by their shadow
+    // rays, and the emitters' direct light as a texel's (lighting/direct_light.h). Each
+    // point's fans are seeded by its index: the same bytes at any thread count.
+    std::vector<vec3> openPoints(const std::vector<vec3>& points, const std::vector<vec3>& normals,
+                                 int raysPerAxis) const;
 
 private:
     const ReceiverScene& tracing_;

@@ -38,6 +38,9 @@ struct DirectLightSettings {
     // false: the lights an engine draws itself (TraceLight::engineDrawn) are left out, for a
     // lightmap that holds their indirect light alone.
     bool engineDrawnLights = true;
+    // false: no punctual light at all, for an irradiance volume's probes, which take them
+    // exactly (probes/irradiance_volume.h).
+    bool punctualLights = true;
 };
 
 // cos θ_r · cos θ_e / d² between a receiver (p; geometric normal ng, shading normal ns) and
@@ -403,46 +406,52 @@ VL_HOSTDEV inline vec3 punctualLightsIrradiance(const TraceSceneView& s, const B
     return e + treePointLightsIrradiance(s, bvh, p, ng, ns, budget, seed);
 }
 
-// Direct irradiance E at a receiver sample (lights, emitters and the sky), deterministic per `seed`.
-VL_HOSTDEV inline vec3 directIrradiance(const TraceSceneView& s, const BvhView& bvh, const SurfaceSample& r,
-                                        const DirectLightSettings& settings, uint64_t seed) {
-    const vec3* v = s.vertices + 3 * static_cast<size_t>(r.triangle);
-    vec3 ng = glm::normalize(glm::cross(v[1] - v[0], v[2] - v[0]));
-    if (glm::dot(ng, r.normal) < 0.0f) ng = -ng;
+// Direct irradiance E at point p (geometric normal ng, shading normal ns, both unit; lights,
+// emitters and the sky), deterministic per `seed`.
+VL_HOSTDEV inline vec3 directIrradianceAt(const TraceSceneView& s, const BvhView& bvh, const vec3& p, const vec3& ng,
+                                          const vec3& ns, const DirectLightSettings& settings, uint64_t seed) {
     vec3 e(0.0f);
-    const bool pointTree = s.pointLightTree.nodes != nullptr;
-    for (uint32_t i = 0; i < s.lightCount; ++i) {
+    const bool pointTree = s.pointLightTree.nodes != nullptr && settings.punctualLights;
+    for (uint32_t i = 0; i < s.lightCount && settings.punctualLights; ++i) {
         const TraceLight& light = s.lights[i];
         if (!settings.engineDrawnLights && light.engineDrawn) continue;
         if (light.type == TraceLightType::Directional && light.cosHalfAngle < 1.0f)
-            e += sunIrradiance(bvh, light, r.position, ng, r.normal, settings.emitterStrata, seed, i);
+            e += sunIrradiance(bvh, light, p, ng, ns, settings.emitterStrata, seed, i);
         else if (light.type == TraceLightType::Directional || !pointTree)
-            e += punctualLightIrradiance(bvh, light, r.position, ng, r.normal, vec2(0.0f));
+            e += punctualLightIrradiance(bvh, light, p, ng, ns, vec2(0.0f));
     }
     if (pointTree)
-        e += treePointLightsIrradiance(s, bvh, r.position, ng, r.normal, settings.lightCut, seed, settings.engineDrawnLights);
-    if (settings.skyAtSamples) e += skyIrradiance(s, bvh, r.position, ng, r.normal, settings.skyStrata, seed);
+        e += treePointLightsIrradiance(s, bvh, p, ng, ns, settings.lightCut, seed, settings.engineDrawnLights);
+    if (settings.skyAtSamples) e += skyIrradiance(s, bvh, p, ng, ns, settings.skyStrata, seed);
     const auto patch = [&](uint32_t k) {
         const int8_t quad = s.emitterQuad ? s.emitterQuad[k] : kQuadSingle;
-        if (quad == kQuadFirstHalf)
-            return emitterQuadIrradiance(s, bvh, k, r.position, ng, r.normal, settings.emitterStrata, seed, k);
+        if (quad == kQuadFirstHalf) return emitterQuadIrradiance(s, bvh, k, p, ng, ns, settings.emitterStrata, seed, k);
         if (quad == kQuadSingle)
-            return emitterIrradiance(s, bvh, s.emitters[k], r.position, ng, r.normal, settings.emitterStrata, seed, k);
+            return emitterIrradiance(s, bvh, s.emitters[k], p, ng, ns, settings.emitterStrata, seed, k);
         return vec3(0.0f);
     };
     if (s.emitterTree.nodes) {
         const uint64_t treeSeed = seed ^ 0x454D4954ull;  // "EMIT"
-        return e + estimateLightTree(s.emitterTree, r.position, r.normal, settings.lightCut, treeSeed,
+        return e + estimateLightTree(s.emitterTree, p, ns, settings.lightCut, treeSeed,
                                      [&](uint32_t k, int draw, bool alone) {
                                          if (alone) return patch(k);
                                          Pcg32 point = Pcg32::forItem(treeSeed, uint64_t(draw), 0x504F494Eull);  // "POIN"
                                          vec2 u;
                                          point.next2D(u.x, u.y);
-                                         return patchAreaSample(s, bvh, k, r.position, ng, r.normal, u);
+                                         return patchAreaSample(s, bvh, k, p, ng, ns, u);
                                      });
     }
     for (uint32_t k = 0; k < s.emitterCount; ++k) e += patch(k);
     return e;
+}
+
+// Direct irradiance E at a receiver sample, on its side of its triangle.
+VL_HOSTDEV inline vec3 directIrradiance(const TraceSceneView& s, const BvhView& bvh, const SurfaceSample& r,
+                                        const DirectLightSettings& settings, uint64_t seed) {
+    const vec3* v = s.vertices + 3 * static_cast<size_t>(r.triangle);
+    vec3 ng = glm::normalize(glm::cross(v[1] - v[0], v[2] - v[0]));
+    if (glm::dot(ng, r.normal) < 0.0f) ng = -ng;
+    return directIrradianceAt(s, bvh, r.position, ng, r.normal, settings, seed);
 }
 
 }  // namespace vl

@@ -318,8 +318,18 @@ BakeReport mergeScene(const BakeJob& job, const std::string& sceneWork, const Sc
         Scene loaded = loadJobScene(job);
         const ExportSource source = exportSourceOf(loaded);
         const Scene scene = receiverScene(std::move(loaded), state);
+        // The irradiance volume, lit as a receiver unit lights its texels.
+        BakeResult volume;
+        if (irradianceVolumeSpacing(scene, job.settings) > 0.0) {
+            const ReceiverScene tracing(scene, job.settings.lightTrees);
+            const IndirectLight light = restoreIndirectLight(state, tracing, job.settings);
+            addIrradianceVolume(scene, tracing, bakeReceiverGather(tracing, light, job.settings, state.onGpu),
+                                job.settings, volume);
+        }
         BakeResult result = std::move(state.result);
+        result.volume = std::move(volume.volume);
         report.stages.insert(report.stages.end(), result.stages.begin(), result.stages.end());
+        report.stages.insert(report.stages.end(), volume.stages.begin(), volume.stages.end());
         // As the bake left them (writeBakeFiles adds the coarser levels for grids.vdb).
         result.mips = receiverMips(result.voxels, result.gatherVisibility.visibility, state.gathered);
 

@@ -177,6 +177,7 @@ void captureInBrowser(ViewServer& server, const BrowserCapture& capture) {
     url << server.url() << "?capture" << (capture.wholePage ? "=page" : "") << "&scene=" << urlEscaped(capture.scene)
         << "&camera=" << capture.camera << "&mode=" << urlEscaped(capture.mode) << "&exposure=" << capture.exposureStops
         << "&width=" << capture.width << "&height=" << capture.height << (capture.threeMaterials ? "&material=three" : "");
+    for (const std::string& sphere : capture.spheres) url << "&sphere=" << urlEscaped(sphere);
     char profileTemplate[] = "/tmp/voxlight-chromium-XXXXXX";
     if (!::mkdtemp(profileTemplate)) throw Error("view: cannot make a browser profile folder in /tmp");
     const std::string profile = profileTemplate;

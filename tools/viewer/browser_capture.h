@@ -5,6 +5,7 @@
 #include "viewer/view_server.h"
 
 #include <string>
+#include <vector>
 
 namespace vl {
 
@@ -18,6 +19,9 @@ struct BrowserCapture {
     std::string mode = "lit";     // lit | lightmap | albedo
     double exposureStops = 0.0;
     bool threeMaterials = false;  // three.js' own materials (tools/viewer/moz_lightmap.js)
+    // Spheres lit by the scene's irradiance volume: "x,y,z,r" (world metres), optionally
+    // ",albedo" or ",r,g,b" (linear), as the page's ?sphere takes them.
+    std::vector<std::string> spheres;
     int width = 1280, height = 720;
     // false: the canvas alone, as the page drew it (exact pixels: the test compares them);
     // true: the whole page with its controls, as a user sees it (Chromium's screenshot).

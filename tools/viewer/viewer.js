@@ -17,6 +17,10 @@
 // material's shadowmask (shadowmask.js); an "indirect" sun with a shadow map softened by its
 // disk (sun_shadows.js); an "indirect" point or spot light with a cube map of distances
 // (lamp_shadows.js). Past two suns and two lamps the page says what it leaves out.
+// When scene.glb has an irradiance volume (VOXLIGHT_irradiance_volume, irradiance_volume.js),
+// objects the bake did not see are lit from it: ?sphere=x,y,z,r[,albedo | ,r,g,b] (world metres,
+// repeatable; captures show it too), a sphere added with the panel's button or N and dragged
+// with the mouse, and a .glb/.gltf dropped on the page.
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
@@ -27,6 +31,8 @@ import { shadowmaskLights, shadowmaskUniforms, SHADOWMASK_GLSL } from './shadowm
 import { drawnSuns, SunShadowMaps, SUN_SHADOW_GLSL } from './sun_shadows.js';
 import { drawnLamps, LampShadowMaps, LAMP_SHADOW_GLSL } from './lamp_shadows.js';
 import { PUNCTUAL_GLSL } from './punctual.js';
+import { loadIrradianceVolume } from './irradiance_volume.js';
+import { dynamicObjects, parseSpheres, volumeSphere } from './moving_objects.js';
 
 const params = new URLSearchParams(location.search);
 const capturing = params.get('capture') === '';         // the canvas alone, posted to /capture
@@ -393,6 +399,7 @@ async function main() {
     exposure: { value: Math.pow(2, Number(params.get('exposure') ?? 0)) },
   };
   const gltf = await new GLTFLoader().loadAsync(sceneUrl(scene, 'scene.glb'));
+  const volume = await loadIrradianceVolume(gltf).catch((error) => { report(error.message); return null; });
   // ?material=three: three.js' own materials through moz_lightmap.js, the README's recipe (the
   // show and exposure controls do not apply to them).
   const threeMaterials = params.get('material') === 'three';
@@ -445,7 +452,18 @@ async function main() {
   if (cameras[chosen]) jumpTo(view, cameras[chosen].camera, width / height);
   else frameBox(view, box, width / height);
 
+  // Spheres of ?sphere, lit by the irradiance volume (after the box: they do not frame the view).
+  let spheres = [];
+  try {
+    spheres = parseSpheres(params.getAll('sphere'));
+  } catch (error) {
+    report(error.message);
+  }
+  if (spheres.length > 0 && !volume) report('?sphere: no irradiance volume in this bake to light it');
+  const urlSpheres = volume ? spheres.map((s) => volumeSphere(volume, shared, s.centre, s.radius, s.albedo)) : [];
+
   if (capturing) {
+    for (const sphere of urlSpheres) world.add(sphere);
     if (chosen >= 0 && params.has('camera') && !cameras[chosen]) throw new Error(`the scene has no camera ${chosen} (it has ${cameras.length})`);
     skyBackground();
     renderer.render(world, view);
@@ -512,8 +530,35 @@ async function main() {
   document.getElementById('info').textContent = [
     `${counts.meshes} meshes` + (counts.unlit ? `, ${counts.unlit} primitives without a lightmap (shown at ${UNLIT_LEVEL} × albedo)` : ''),
     bake ? `baked in ${Number(bake.total_seconds).toFixed(2)} s, voxel size ${Number(bake.voxel_size).toPrecision(3)}` : '',
+    volume ? `irradiance volume: ${volume.counts.join(' × ')} probes, ` +
+             `spacing ${volume.spacing.toArray().map((d) => d.toPrecision(3)).join(' × ')} m`
+           : 'no irradiance volume in this bake',
     'walk: click, then WASD, Q/E, Shift; Esc',
+    volume ? 'sphere: add (N), drag (Shift: nearer/farther), Delete; drop a .glb/.gltf to light it here' : '',
   ].filter(Boolean).join('\n');
+
+  // Objects lit by the irradiance volume: the panel's spheres, dragged; a dropped glTF.
+  const dynamic = volume && dynamicObjects({ volume, shared, world, view, canvas: renderer.domElement, orbit,
+                                             isWalking: () => walking, size });
+  if (dynamic) {
+    for (const sphere of urlSpheres) dynamic.group.add(sphere);
+    document.getElementById('volume').hidden = false;
+    document.getElementById('addSphere').onclick = dynamic.addSphere;
+    document.getElementById('clearObjects').onclick = dynamic.clear;
+    addEventListener('keydown', (e) => {
+      if (e.target.tagName === 'INPUT' || e.target.tagName === 'SELECT' || e.repeat) return;
+      if (e.code === 'KeyN') dynamic.addSphere();
+      if (e.code === 'Delete' || e.code === 'Backspace') dynamic.remove();
+    });
+  }
+  addEventListener('dragover', (e) => e.preventDefault());
+  addEventListener('drop', (e) => {
+    e.preventDefault();
+    if (!dynamic) return report('no irradiance volume in this bake to light a dropped model with');
+    dynamic.addModel([...e.dataTransfer.files])
+      .then((note) => { if (note) document.getElementById('info').textContent += '\n' + note; })
+      .catch((error) => report(error.message || String(error)));
+  });
 
   renderer.xr.enabled = true;
   document.body.appendChild(VRButton.createButton(renderer));
@@ -528,6 +573,7 @@ async function main() {
   renderer.setAnimationLoop(() => {
     timer.update();
     const dt = Math.min(timer.getDelta(), 0.1);
+    dynamic?.update(dt);
     if (walking && walk.isLocked) {
       const speed = size * 0.1 * (keys.has('ShiftLeft') || keys.has('ShiftRight') ? 4 : 1) * dt;
       const axis = (plus, minus) => (keys.has(plus) ? 1 : 0) - (keys.has(minus) ? 1 : 0);

@@ -85,6 +85,9 @@ void addViewCommand(CLI::App& app) {
                     "with --screenshot: the glTF camera, in the file's order (default 0; -1: the whole scene)");
     cmd->add_option("--mode", options->capture.mode, "with --screenshot: lit | lightmap | albedo (default lit)");
     cmd->add_option("--exposure", options->capture.exposureStops, "with --screenshot: exposure in stops (default 0)");
+    cmd->add_option("--sphere", options->capture.spheres,
+                    "with --screenshot: a sphere lit by the irradiance volume, x,y,z,r in world metres, optionally "
+                    ",albedo or ,r,g,b (repeatable; the page's ?sphere)");
     cmd->add_option("--size", options->size, "with --screenshot: WIDTHxHEIGHT (default 1280x720)");
     cmd->add_flag("--whole-page", options->capture.wholePage,
                   "with --screenshot: the page with its controls, not the canvas alone");
