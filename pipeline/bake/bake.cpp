@@ -222,6 +222,8 @@ GeneratedUvs generateSharedAtlasUvs(Scene& scene, const BakeSettings& settings, 
 VoxelStages bakeVoxelStages(Scene& scene, const BakeSettings& settings, Diagnostics& diagnostics) {
     validateBakeSettings(settings);
     resolveLightBake(scene, settings.lightBake);
+    // A volume finer than the probe limit is refused now, not after the lightmaps.
+    volumeGrid(worldBox(scene), irradianceVolumeSpacing(scene, settings), scene.sourcePath);
     VoxelStages stages;
     BakeResult& result = stages.result;
     // Into its own frame before anything is sized: a resolution, the free paths' count and
@@ -405,14 +407,15 @@ void addLightmapImages(const Scene& scene, const ReceiverScene& tracing, const B
 double irradianceVolumeSpacing(const Scene& scene, const BakeSettings& settings) {
     if (!lightsVolume(settings) || settings.irradianceVolume.spacing == 0.0) return 0.0;
     if (settings.irradianceVolume.spacing > 0.0) return settings.irradianceVolume.spacing;
-    Aabb box;
-    for (const Mesh& mesh : scene.meshes)
-        for (const vec3& p : mesh.positions) box.extend(p);
+    const WorldBox box = worldBox(scene);
     if (box.empty()) return 0.0;
-    const vec3 size = box.extent();
-    const double volume = double(std::max(size.x, 0.01f)) * double(std::max(size.y, 0.01f)) * double(std::max(size.z, 0.01f));
-    const double longest = double(std::max({size.x, size.y, size.z}));
-    return std::max(std::min(kAutoVolumeSpacing, longest / kAutoVolumeProbesAlong), std::cbrt(volume / kAutoVolumeProbes));
+    const glm::dvec3 size = box.hi - box.lo;
+    const double longest = std::max({size.x, size.y, size.z});
+    if (!(longest > 0.0)) return kAutoVolumeSpacing;
+    // Coarser by 10% at a time until the grid holds kAutoVolumeProbes or fewer.
+    double spacing = std::min(kAutoVolumeSpacing, longest / kAutoVolumeProbesAlong);
+    while (volumeProbeCount(box, spacing) > kAutoVolumeProbes) spacing *= 1.1;
+    return spacing;
 }
 
 void addIrradianceVolume(const Scene& scene, const ReceiverScene& tracing, const ReceiverGather& gather,

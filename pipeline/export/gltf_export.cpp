@@ -9,6 +9,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <map>
@@ -502,6 +503,7 @@ void addIrradianceVolume(tinygltf::Model& model, BinaryBuffer& bin, const Export
             tinygltf::Value::Object entry;
             entry["direction"] = triple(sun.direction);
             entry["irradiance"] = triple(sun.irradiance);
+            entry["drawnByEngine"] = tinygltf::Value(sun.drawnByEngine);
             suns.push_back(tinygltf::Value(entry));
         }
         ext["suns"] = tinygltf::Value(suns);
@@ -522,6 +524,7 @@ ExportedIrradianceVolume readIrradianceVolume(const std::string& path) {
     if (found == model.extensions.end()) throw InputError(path + ": no " + kVolumeExtension);
     const tinygltf::Value& ext = found->second;
     const std::string where = path + ": " + kVolumeExtension;
+    if (!ext.IsObject()) throw InputError(where + " is not an object");
     const auto number = [&](const tinygltf::Value& v, const std::string& key) {
         if (!v.IsNumber()) throw InputError(where + ": " + key + " is not a number");
         return v.GetNumberAsDouble();
@@ -534,16 +537,25 @@ ExportedIrradianceVolume readIrradianceVolume(const std::string& path) {
     ExportedIrradianceVolume volume;
     volume.origin = triple("origin");
     volume.spacing = triple("spacing");
+    for (int axis = 0; axis < 3; ++axis)
+        if (!std::isfinite(volume.origin[axis]) || !std::isfinite(volume.spacing[axis]) || !(volume.spacing[axis] > 0.0))
+            throw InputError(where + ": origin is not finite, or spacing not finite and positive");
     const glm::dvec3 counts = triple("counts");
-    volume.counts = glm::ivec3(counts);
-    if (glm::dvec3(volume.counts) != counts || volume.counts.x < 1 || volume.counts.y < 1 || volume.counts.z < 1)
-        throw InputError(where + ": counts are not whole numbers of at least 1");
+    double probes = 1.0;
+    for (int axis = 0; axis < 3; ++axis) {
+        if (!(counts[axis] >= 1.0) || counts[axis] != std::floor(counts[axis]) || (probes *= counts[axis]) > double(kMaxVolumeProbes))
+            throw InputError(where + ": counts are not whole numbers of at least 1, or hold more than " +
+                             std::to_string(kMaxVolumeProbes) + " probes");
+        volume.counts[axis] = int(counts[axis]);
+    }
     const int width = volume.counts.x, height = volume.counts.y * volume.counts.z;
     const auto image = [&](const tinygltf::Value& index, const std::string& key, int channels) {
         const double i = number(index, key);
         if (!(i >= 0.0) || i >= double(model.images.size()) || model.images[size_t(i)].bufferView < 0)
-            throw InputError(where + ": " + key + " names no image of the file");
+            throw InputError(where + ": " + key + " names no image stored in the file");
         const auto [bytes, size] = gltf::bufferViewBytes(model, model.images[size_t(i)].bufferView, where + ": " + key);
+        if (const std::string problem = gltf::encodedImageProblem(bytes, size); !problem.empty())
+            throw InputError(where + ": " + key + ": " + problem);
         int w = 0, h = 0, c = 0;
         std::vector<uint8_t> texels = decodeImage8(std::vector<uint8_t>(bytes, bytes + size), where + ": " + key, w, h, c);
         if (w != width || h != height || c < channels)
@@ -558,22 +570,30 @@ ExportedIrradianceVolume readIrradianceVolume(const std::string& path) {
     volume.mean.width = width;
     volume.mean.height = height;
     volume.mean.range = float(number(ext.Get("range"), "range"));
+    if (!std::isfinite(volume.mean.range) || !(volume.mean.range > 0.0f))
+        throw InputError(where + ": range is not finite and positive");
     volume.mean.rgba = image(ext.Get("irradiance"), "irradiance", 4);
     const tinygltf::Value& gradient = ext.Get("gradient");
     if (!gradient.IsArray() || gradient.ArrayLen() != 3) throw InputError(where + ": gradient is not three images");
-    for (int axis = 0; axis < 3; ++axis) volume.gradient[size_t(axis)] = image(gradient.Get(axis), "gradient", 3);
+    for (int axis = 0; axis < 3; ++axis)
+        volume.gradient[size_t(axis)] = image(gradient.Get(axis), "gradient[" + std::to_string(axis) + "]", 3);
     volume.valid = image(ext.Get("valid"), "valid", 1);
-    const tinygltf::Value& suns = ext.Get("suns");
-    if (suns.IsArray()) {
-        if (suns.ArrayLen() > 4) throw InputError(where + ": more than four suns");
+    if (ext.Has("suns")) {
+        const tinygltf::Value& suns = ext.Get("suns");
+        if (!suns.IsArray() || suns.ArrayLen() > 4) throw InputError(where + ": suns is not an array of at most four");
         for (size_t s = 0; s < suns.ArrayLen(); ++s) {
             const tinygltf::Value& sun = suns.Get(int(s));
+            if (!sun.IsObject()) throw InputError(where + ": suns[" + std::to_string(s) + "] is not an object");
             const auto vector = [&](const std::string& key) {
                 const tinygltf::Value& v = sun.Get(key);
                 if (!v.IsArray() || v.ArrayLen() != 3) throw InputError(where + ": suns[" + std::to_string(s) + "]." + key + " is not three numbers");
-                return vec3(float(number(v.Get(0), key)), float(number(v.Get(1), key)), float(number(v.Get(2), key)));
+                const std::string named = "suns[" + std::to_string(s) + "]." + key;
+                return vec3(float(number(v.Get(0), named)), float(number(v.Get(1), named)), float(number(v.Get(2), named)));
             };
-            volume.suns.push_back({vector("direction"), vector("irradiance")});
+            const tinygltf::Value& drawn = sun.Get("drawnByEngine");
+            if (sun.Has("drawnByEngine") && !drawn.IsBool())
+                throw InputError(where + ": suns[" + std::to_string(s) + "].drawnByEngine is not true or false");
+            volume.suns.push_back({vector("direction"), vector("irradiance"), drawn.IsBool() && drawn.Get<bool>()});
         }
         volume.sunVisibility = image(ext.Get("sunVisibility"), "sunVisibility", 4);
     }

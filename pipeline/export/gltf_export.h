@@ -51,6 +51,9 @@ struct ExportedLightmap {
 // docs/irradiance-volume.md): every image counts.x wide and counts.y · counts.z tall, probe
 // (i, j, k) at column i, row j·counts.z + k. `mean`: A (E/π) in RGBM; `gradient` per world axis
 // 8-bit linear RGB, B/A per channel as 2 · (code − 127) / 127 (127: none); `valid` 8-bit grey, 255 open.
+// More probes than this are refused, baked (SettingsError) or read (InputError).
+constexpr size_t kMaxVolumeProbes = 4u << 20;
+
 struct ExportedIrradianceVolume {
     glm::dvec3 origin{0.0}, spacing{0.0};
     glm::ivec3 counts{0};
@@ -62,6 +65,7 @@ struct ExportedIrradianceVolume {
     struct Sun {
         vec3 direction{0.0f, -1.0f, 0.0f};
         vec3 irradiance{0.0f};
+        bool drawnByEngine = false;
     };
     std::vector<Sun> suns;
     std::vector<uint8_t> sunVisibility;  // 4 bytes a probe; empty without suns

@@ -84,10 +84,11 @@ public:
     // punctual lights' direct light, which the caller takes exactly. Its indirect light and
     // sky by a fan of raysPerAxis² rays as a lightmap's records gather them (gather/ray_gather.h,
     // the near field and the lights at hits included), its bright patches' by their shadow
-    // rays, and the emitters' direct light as a texel's (lighting/direct_light.h). Each
-    // point's fans are seeded by its index: the same bytes at any thread count.
-    std::vector<vec3> openPoints(const std::vector<vec3>& points, const std::vector<vec3>& normals,
-                                 int raysPerAxis) const;
+    // rays, and the emitters' direct light as a texel's (lighting/direct_light.h). Point k's
+    // fans are seeded by firstIndex + k (a batch's place among all the points): the same bytes
+    // at any thread count and any batching.
+    std::vector<vec3> openPoints(const std::vector<vec3>& points, const std::vector<vec3>& normals, int raysPerAxis,
+                                 uint64_t firstIndex = 0) const;
 
 private:
     const ReceiverScene& tracing_;

@@ -10,7 +10,7 @@
 namespace vl {
 
 std::vector<vec3> ReceiverGather::openPoints(const std::vector<vec3>& points, const std::vector<vec3>& normals,
-                                             int raysPerAxis) const {
+                                             int raysPerAxis, uint64_t firstIndex) const {
     const BrightPatchSplit& bright = light_.bright;
     if (points.empty() || normals.empty()) return {};
     if (bright.restFaces.empty())
@@ -23,7 +23,6 @@ std::vector<vec3> ReceiverGather::openPoints(const std::vector<vec3>& points, co
     // would need its own draws; every light but the punctual ones per fan.
     const bool skyInFans = !scene.sky.hasImage();
     DirectLightSettings direct = direct_;
-    direct.engineDrawnLights = false;
     direct.punctualLights = false;
     direct.skyAtSamples = !skyInFans;
     std::vector<FanStart> fans(count);
@@ -31,10 +30,11 @@ std::vector<vec3> ReceiverGather::openPoints(const std::vector<vec3>& points, co
         const vec3& n = normals[k % perPoint];
         vec3 tangent, bitangent;
         orthonormalBasis(n, tangent, bitangent);
-        const double turn = double(k / perPoint) * 0.7548776662466927 + double(k % perPoint) * 0.5698402909980532;
+        const uint64_t point = firstIndex + k / perPoint;
+        const double turn = double(point) * 0.7548776662466927 + double(k % perPoint) * 0.5698402909980532;
         fans[k].origin = points[k / perPoint];
         fans[k].frame = fanFrame(n, tangent, float(turn - std::floor(turn)));
-        fans[k].seed = uint64_t(k) * 0x9E3779B97F4A7C15ull + uint64_t(settings_.lightmapSeed);
+        fans[k].seed = (point * perPoint + k % perPoint) * 0x9E3779B97F4A7C15ull + uint64_t(settings_.lightmapSeed);
         Pcg32 rng(fans[k].seed, 0x7e7e1);
         rng.next2D(fans[k].jitter.x, fans[k].jitter.y);
     });
@@ -43,7 +43,7 @@ std::vector<vec3> ReceiverGather::openPoints(const std::vector<vec3>& points, co
     if (!bright.lightsAtHits.empty()) extras.lightsAtHits = &bright.lightsAtHits;
     if (bright.patches.empty()) extras.nearField = settings_.nearFieldVoxels * mipView_.voxelSize;
     std::vector<vec3> irradiance =
-        gatherFans(fans, mipView_, bright.restFaces, bvh, scene, raysPerAxis, nullptr, &extras, direct_.skyStrata);
+        gatherFans(fans, mipView_, bright.restFaces, bvh, scene, raysPerAxis, nullptr, &extras, direct.skyStrata);
     tbb::parallel_for(size_t(0), count, [&](size_t k) {
         const vec3& n = normals[k % perPoint];
         irradiance[k] += extras.sky[k] +

@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "core/text.h"
 #include "lighting/direct_light.h"
 #include "trace/bvh_traverse.h"
 
@@ -49,11 +50,11 @@ void addPunctualLights(const TraceSceneView& scene, const BvhView& bvh, const ve
                        std::array<float, kVolumeSuns>& sunVisibility) {
     for (uint32_t i = 0; i < scene.lightCount; ++i) {
         const TraceLight& light = scene.lights[i];
-        if (light.engineDrawn) continue;
         if (apart[i] >= 0) {
             sunVisibility[size_t(apart[i])] = lightVisibility(bvh, light, p, -light.direction, kSunStrata, seed, i);
             continue;
         }
+        if (light.engineDrawn) continue;
         vec3 toward;
         if (light.type == TraceLightType::Directional) {
             toward = -light.direction;
@@ -74,31 +75,59 @@ void addPunctualLights(const TraceSceneView& scene, const BvhView& bvh, const ve
 
 }  // namespace
 
-IrradianceVolume bakeIrradianceVolume(const Scene& scene, const ReceiverScene& tracing, const ReceiverGather& gather,
-                                      const IrradianceVolumeSettings& settings, bool quiet) {
-    IrradianceVolume volume;
-    if (!(settings.spacing > 0.0)) return volume;
-    glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+WorldBox worldBox(const Scene& scene) {
+    WorldBox box;
     for (const Mesh& mesh : scene.meshes)
         for (const vec3& p : mesh.positions) {
             const glm::dvec3 world = scene.origin + scene.frame * glm::dvec3(p);
-            lo = glm::min(lo, world);
-            hi = glm::max(hi, world);
+            box.lo = glm::min(box.lo, world);
+            box.hi = glm::max(box.hi, world);
         }
-    if (!(lo.x <= hi.x)) return volume;
-    // Probes at the centres of `spacing`-wide cells over the box, so none lies on its walls.
-    size_t total = 1;
+    return box;
+}
+
+namespace {
+
+// Cells `spacing` wide along one axis of the box: at least one.
+double cellsAlong(const WorldBox& box, int axis, double spacing) {
+    return std::max(1.0, std::ceil((box.hi[axis] - box.lo[axis]) / spacing - 1e-9));
+}
+
+}  // namespace
+
+double volumeProbeCount(const WorldBox& box, double spacing) {
+    if (box.empty() || !(spacing > 0.0)) return 0.0;
+    return cellsAlong(box, 0, spacing) * cellsAlong(box, 1, spacing) * cellsAlong(box, 2, spacing);
+}
+
+VolumeGrid volumeGrid(const WorldBox& box, double spacing, const std::string& sceneName) {
+    VolumeGrid grid;
+    if (box.empty() || !(spacing > 0.0)) return grid;
+    const glm::dvec3 &lo = box.lo, &hi = box.hi;
+    // At the centres of the cells, so no probe lies on the box's walls.
+    double total = 1.0;
     for (int axis = 0; axis < 3; ++axis) {
-        const double cells = std::ceil((hi[axis] - lo[axis]) / settings.spacing - 1e-9);
-        if (!(cells < double(kMaxVolumeProbes)) || (total *= size_t(std::max(1.0, cells))) > kMaxVolumeProbes)
-            throw SettingsError(scene.sourcePath + ": irradiance-volume " + std::to_string(settings.spacing) +
+        const double cells = cellsAlong(box, axis, spacing);
+        if (!((total *= cells) <= double(kMaxVolumeProbes)))
+            throw SettingsError(sceneName + ": irradiance-volume " + numberText(spacing) +
                                 " m would place more than " + std::to_string(kMaxVolumeProbes) +
                                 " probes over the scene's bounds: give a larger spacing");
-        volume.counts[axis] = int(std::max(1.0, cells));
-        volume.spacing[axis] = settings.spacing;
-        volume.origin[axis] = 0.5 * (lo[axis] + hi[axis]) - 0.5 * double(volume.counts[axis] - 1) * settings.spacing;
+        grid.counts[axis] = int(cells);
+        grid.spacing[axis] = spacing;
+        grid.origin[axis] = 0.5 * (lo[axis] + hi[axis]) - 0.5 * (cells - 1.0) * spacing;
     }
-    const size_t count = total;
+    return grid;
+}
+
+IrradianceVolume bakeIrradianceVolume(const Scene& scene, const ReceiverScene& tracing, const ReceiverGather& gather,
+                                      const IrradianceVolumeSettings& settings, bool quiet) {
+    IrradianceVolume volume;
+    const VolumeGrid grid = volumeGrid(worldBox(scene), settings.spacing, scene.sourcePath);
+    if (grid.probes() == 0) return volume;
+    volume.origin = grid.origin;
+    volume.spacing = grid.spacing;
+    volume.counts = grid.counts;
+    const size_t count = grid.probes();
     volume.mean.assign(count, vec3(0.0f));
     volume.gradient.assign(count, {vec3(0.0f), vec3(0.0f), vec3(0.0f)});
     volume.valid.assign(count, 0);
@@ -117,11 +146,11 @@ IrradianceVolume bakeIrradianceVolume(const Scene& scene, const ReceiverScene& t
     std::vector<int> apart(sceneView.lightCount, -1);
     for (uint32_t i = 0; i < sceneView.lightCount && volume.suns.size() < size_t(kVolumeSuns); ++i) {
         const TraceLight& light = sceneView.lights[i];
-        if (light.engineDrawn || light.type != TraceLightType::Directional) continue;
+        if (light.type != TraceLightType::Directional) continue;
         const vec3 toward = -light.direction;
         const PunctualArrival arrival = punctualArrival(light, vec3(0.0f), toward, toward, vec2(0.0f));
         apart[i] = int(volume.suns.size());
-        volume.suns.push_back({glm::normalize(toWorld * light.direction), arrival.irradiance * kInvPi});
+        volume.suns.push_back({glm::normalize(toWorld * light.direction), arrival.irradiance * kInvPi, light.engineDrawn != 0});
     }
     volume.sunVisibility.assign(volume.suns.empty() ? 0 : count, {});
     std::vector<vec3> local(count);
@@ -133,7 +162,7 @@ IrradianceVolume bakeIrradianceVolume(const Scene& scene, const ReceiverScene& t
     for (size_t first = 0; first < count; first += kProbesPerBatch) {
         const size_t last = std::min(count, first + kProbesPerBatch);
         const std::vector<vec3> batch(local.begin() + long(first), local.begin() + long(last));
-        const std::vector<vec3> lit = gather.openPoints(batch, normals, settings.raysPerAxis);
+        const std::vector<vec3> lit = gather.openPoints(batch, normals, settings.raysPerAxis, first);
         tbb::parallel_for(first, last, [&](size_t probe) {
             const vec3* e = lit.data() + (probe - first) * normals.size();
             vec3 mean = (e[0] + e[1] + e[2] + e[3] + e[4] + e[5]) * (kInvPi / 6.0f);
@@ -180,6 +209,9 @@ vec3 volumeIrradiance(const IrradianceVolume& volume, const glm::dvec3& point, c
             for (int axis = 0; axis < 3; ++axis) w *= step[axis] ? f[axis] : 1.0 - f[axis];
             const size_t probe = volume.index(at.x, at.y, at.z);
             if (validOnly && !volume.valid[probe]) continue;
+            // A valid probe keeps a sliver of weight where its trilinear share is 0: a point
+            // clamped onto a face of invalid probes still reads the valid ones behind it.
+            if (validOnly) w = std::max(w, 1e-6);
             sum += w;
             mean += float(w) * volume.mean[probe];
             for (size_t axis = 0; axis < 3; ++axis) gradient[axis] += float(w) * volume.gradient[probe][axis];
@@ -238,7 +270,7 @@ ExportedIrradianceVolume encodeIrradianceVolume(const IrradianceVolume& volume) 
     }
     out.valid.resize(volume.probeCount());
     for (size_t p = 0; p < volume.probeCount(); ++p) out.valid[p] = volume.valid[p] ? 255 : 0;
-    for (const IrradianceVolume::Sun& sun : volume.suns) out.suns.push_back({sun.direction, sun.irradiance});
+    for (const IrradianceVolume::Sun& sun : volume.suns) out.suns.push_back({sun.direction, sun.irradiance, sun.drawnByEngine});
     if (!volume.suns.empty()) {
         out.sunVisibility.assign(4 * volume.probeCount(), 255);  // channels without a sun: 1
         for (size_t p = 0; p < volume.probeCount(); ++p)
@@ -267,7 +299,8 @@ IrradianceVolume decodeIrradianceVolume(const ExportedIrradianceVolume& encoded)
                     volume.mean[p][c] * 2.0f * (float(encoded.gradient[axis][3 * p + size_t(c)]) - 127.0f) / 127.0f;
         volume.valid[p] = encoded.valid[p] > 127 ? 1 : 0;
     }
-    for (const ExportedIrradianceVolume::Sun& sun : encoded.suns) volume.suns.push_back({sun.direction, sun.irradiance});
+    for (const ExportedIrradianceVolume::Sun& sun : encoded.suns)
+        volume.suns.push_back({sun.direction, sun.irradiance, sun.drawnByEngine});
     if (!volume.suns.empty()) {
         volume.sunVisibility.assign(probes, {});
         for (size_t p = 0; p < probes; ++p)

@@ -19,6 +19,8 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
+#include <string>
 #include <vector>
 
 namespace vl {
@@ -28,13 +30,13 @@ struct IrradianceVolumeSettings {
     int raysPerAxis = 8;   // each probe's fans (six, along ±x, ±y, ±z): n × n rays
 };
 
-// More probes than this are refused (SettingsError): a spacing far below the scene's size.
-constexpr size_t kMaxVolumeProbes = 4u << 20;
-// Suns (directional lights the lightmaps hold) a volume keeps apart, each as its visibility per
-// probe: a sun's light is one direction, whose cosine a probe's L1 smooths to a quarter of its
-// contrast, so an object in a sun patch would show a terminator far softer than the sun's. A
-// reader draws each one exactly, E·max(0, n·ω)/π times the visibility interpolated. Past four,
-// suns go into A and B as the point lights do.
+// Suns (directional lights) a volume keeps apart, each as its visibility per probe: a sun's
+// light is one direction, whose cosine a probe's L1 smooths to a quarter of its contrast, so an
+// object in a sun patch would show a terminator far softer than the sun's. A reader draws each
+// one on what moves exactly, E·max(0, n·ω)/π times the visibility interpolated. A sun the engine
+// draws (LightBake::Indirect, Shadowmask) is kept too: its direct light is in no probe, and its
+// visibility there is what moving objects need of it (Unity's probe occlusion). Past four, suns
+// of mode all go into A and B as the point lights do; engine-drawn ones are left to the engine.
 constexpr int kVolumeSuns = 4;
 
 // A probe is inside geometry when at least this share of the rays it sends hits surfaces from
@@ -57,6 +59,7 @@ struct IrradianceVolume {
     struct Sun {
         vec3 direction{0.0f, -1.0f, 0.0f};
         vec3 irradiance{0.0f};
+        bool drawnByEngine = false;  // its bake mode indirect or shadowmask: the lightmaps hold none of its direct light
     };
     std::vector<Sun> suns;
     std::vector<std::array<float, kVolumeSuns>> sunVisibility;
@@ -70,6 +73,26 @@ struct IrradianceVolume {
     }
     glm::dvec3 position(int i, int j, int k) const { return origin + glm::dvec3(i, j, k) * spacing; }
 };
+
+// The world bounding box of a scene's geometry (world = origin + frame · local); lo > hi when
+// it has none.
+struct WorldBox {
+    glm::dvec3 lo{std::numeric_limits<double>::infinity()}, hi{-std::numeric_limits<double>::infinity()};
+    bool empty() const { return !(lo.x <= hi.x); }
+};
+WorldBox worldBox(const Scene& scene);
+
+// Where the probes lie: at the centres of cells `spacing` wide over `box`, centred on it, at
+// least one per axis. Counts zero for an empty box or a spacing not above 0. SettingsError,
+// naming `sceneName` and the setting, past kMaxVolumeProbes.
+struct VolumeGrid {
+    glm::dvec3 origin{0.0}, spacing{0.0};
+    glm::ivec3 counts{0};
+    size_t probes() const { return size_t(counts.x) * size_t(counts.y) * size_t(counts.z); }
+};
+VolumeGrid volumeGrid(const WorldBox& box, double spacing, const std::string& sceneName);
+// How many probes volumeGrid would place (any number: nothing is refused).
+double volumeProbeCount(const WorldBox& box, double spacing);
 
 // The probes over the world bounding box of `scene`'s geometry (centred on it, `spacing`
 // apart, at least one per axis), each lit by `gather` (ReceiverGather::openPoints for six

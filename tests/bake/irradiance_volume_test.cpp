@@ -9,9 +9,16 @@
 #include "support/room_scenes.h"
 
 #include <catch2/catch.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <tbb/global_control.h>
 
+#include <nlohmann/json.hpp>
+
+#include <cstring>
 #include <filesystem>
+#include <functional>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 using namespace vl;
@@ -40,6 +47,28 @@ void addBlock(Scene& scene, int material, vec3 lo, vec3 hi) {
     addQuad(scene, "block +x", material, p100, p110, p111, p101);
     addQuad(scene, "block -z", material, p000, p010, p110, p100);
     addQuad(scene, "block +z", material, p001, p101, p111, p011);
+}
+
+// A copy of the .glb at `from` with its JSON chunk edited by `change`, written to `to`.
+template <class Change>
+void editGlb(const std::string& from, const std::string& to, Change change) {
+    std::ifstream in(from, std::ios::binary);
+    const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    uint32_t jsonLength = 0;
+    std::memcpy(&jsonLength, bytes.data() + 12, 4);
+    nlohmann::json json = nlohmann::json::parse(bytes.begin() + 20, bytes.begin() + 20 + jsonLength);
+    change(json);
+    std::string text = json.dump();
+    while (text.size() % 4) text += ' ';
+    const std::vector<char> rest(bytes.begin() + 20 + jsonLength, bytes.end());
+    const uint32_t length = uint32_t(text.size()), total = uint32_t(12 + 8 + text.size() + rest.size());
+    std::ofstream out(to, std::ios::binary);
+    out.write(bytes.data(), 8);
+    out.write(reinterpret_cast<const char*>(&total), 4);
+    out.write(reinterpret_cast<const char*>(&length), 4);
+    out.write(bytes.data() + 16, 4);  // "JSON"
+    out.write(text.data(), std::streamsize(text.size()));
+    out.write(rest.data(), std::streamsize(rest.size()));
 }
 
 }  // namespace
@@ -107,8 +136,89 @@ TEST_CASE("An irradiance volume holds a sun over black surfaces exactly: its vis
     const IrradianceVolume read = decodeIrradianceVolume(encodeIrradianceVolume(v));
     REQUIRE(read.suns.size() == 1);
     CHECK(read.suns[0].irradiance.x == v.suns[0].irradiance.x);
+    CHECK(!read.suns[0].drawnByEngine);
     for (size_t p = 0; p < v.probeCount(); ++p)
         if (v.valid[p]) CHECK(read.sunVisibility[p][0] == v.sunVisibility[p][0]);
+
+    // The same sun drawn by the engine (light-bake indirect): the probes hold none of its direct
+    // light either, and keep its visibility for what moves, marked as the engine's.
+    BakeSettings indirect = volumeSettings(0.5);
+    indirect.lightBake = LightBake::Indirect;
+    const BakeResult drawn = bake(scene, indirect, diagnostics);
+    REQUIRE(drawn.volume.suns.size() == 1);
+    CHECK(drawn.volume.suns[0].drawnByEngine);
+    CHECK(decodeIrradianceVolume(encodeIrradianceVolume(drawn.volume)).suns[0].drawnByEngine);
+    CHECK(drawn.volume.sunVisibility == v.sunVisibility);
+    CHECK(drawn.volume.mean == v.mean);
+}
+
+TEST_CASE("A scene turned 30 degrees about the vertical keeps its volume in the world's frame: the sun's "
+          "direction, the block's shadow along it and the probes inside the block",
+          "[bake][volume]") {
+    // The sun test's floor and block turned 30° about y, the sun 20° off straight down and
+    // turned with them. The bake turns the scene into its own frame (the floor's axes); the
+    // probes stay on the world's. A probe is in shadow where the ray from it toward the sun
+    // crosses the block (the unturned scene's slab test), inside where the block holds it.
+    Scene scene;
+    scene.sourcePath = "turned sun (test)";
+    const int black = addLambert(scene, vec3(0.0f));
+    addQuad(scene, "floor", black, vec3(-2, 0, -2), vec3(-2, 0, 2), vec3(2, 0, 2), vec3(2, 0, -2));
+    addBlock(scene, black, vec3(-0.5f, 1.5f, -0.5f), vec3(0.5f, 2.5f, 0.5f));
+    const glm::mat3 turn(glm::rotate(glm::mat4(1.0f), glm::radians(30.0f), vec3(0.0f, 1.0f, 0.0f)));
+    for (Mesh& mesh : scene.meshes) {
+        for (vec3& p : mesh.positions) p = turn * p;
+        for (vec3& n : mesh.normals) n = turn * n;
+    }
+    const vec3 unturned = glm::normalize(vec3(std::sin(glm::radians(20.0f)), -std::cos(glm::radians(20.0f)), 0.0f));
+    Light sun;
+    sun.name = "sun";
+    sun.type = LightType::Directional;
+    sun.direction = turn * unturned;
+    sun.intensity = 3.0f;
+    scene.lights.push_back(sun);
+    Diagnostics diagnostics(false, false);
+    const BakeResult result = bake(scene, volumeSettings(0.25), diagnostics);
+    const IrradianceVolume& v = result.volume;
+    REQUIRE(v.suns.size() == 1);
+    CHECK(glm::length(v.suns[0].direction - sun.direction) < 1e-5f);
+    // Whether the ray from p toward the sun meets the block grown by `margin` (unturned frame).
+    const auto shaded = [&](const vec3& p, float margin) {
+        const vec3 lo(-0.5f - margin, 1.5f - margin, -0.5f - margin), hi(0.5f + margin, 2.5f + margin, 0.5f + margin);
+        const vec3 d = -unturned;
+        float near = 0.0f, far = 1e9f;
+        for (int a = 0; a < 3; ++a) {
+            if (std::abs(d[a]) < 1e-9f) {
+                if (p[a] < lo[a] || p[a] > hi[a]) return false;
+                continue;
+            }
+            const float t0 = (lo[a] - p[a]) / d[a], t1 = (hi[a] - p[a]) / d[a];
+            near = std::max(near, std::min(t0, t1));
+            far = std::min(far, std::max(t0, t1));
+        }
+        return near <= far;
+    };
+    size_t inside = 0, dark = 0, lit = 0;
+    for (int j = 0; j < v.counts.y; ++j)
+        for (int k = 0; k < v.counts.z; ++k)
+            for (int i = 0; i < v.counts.x; ++i) {
+                const vec3 p = glm::transpose(turn) * vec3(v.position(i, j, k));
+                const size_t probe = v.index(i, j, k);
+                INFO("probe at " << p.x << ", " << p.y << ", " << p.z << " (unturned)");
+                const bool within = std::abs(p.x) < 0.5f && std::abs(p.z) < 0.5f && p.y > 1.5f && p.y < 2.5f;
+                const bool near = std::abs(p.x) < 0.52f && std::abs(p.z) < 0.52f && p.y > 1.48f && p.y < 2.52f;
+                if (within != near) continue;  // a probe within 2 cm of the block's faces
+                CHECK(v.valid[probe] == (within ? 0 : 1));
+                if (within) {
+                    ++inside;
+                    continue;
+                }
+                if (shaded(p, 0.02f) != shaded(p, -0.02f)) continue;  // within 2 cm of the shadow's edge
+                CHECK(v.sunVisibility[probe][0] == (shaded(p, 0.0f) ? 0.0f : 1.0f));
+                ++(shaded(p, 0.0f) ? dark : lit);
+            }
+    CHECK(inside > 0);
+    CHECK(dark > 0);
+    CHECK(lit > 0);
 }
 
 TEST_CASE("In a closed box of emitting walls every probe holds the walls' radiance from every side",
@@ -189,9 +299,22 @@ TEST_CASE("An irradiance volume finer than the probe limit is refused naming the
         CHECK(what.find("huge.gltf") != std::string::npos);
         CHECK(what.find("irradiance-volume") != std::string::npos);
     }
-    // auto keeps a hall's probes near kAutoVolumeProbes: 100 m / ∛32768 = 3.125 m apart.
+    // auto keeps a hall's probes at kAutoVolumeProbes or fewer: 32 a side needs 100 m / 32 =
+    // 3.125 m, and auto steps by 10%.
     settings.irradianceVolume.spacing = -1.0;
-    CHECK(irradianceVolumeSpacing(scene, settings) == Approx(100.0 / 32.0));
+    const double hall = irradianceVolumeSpacing(scene, settings);
+    CHECK(volumeGrid(worldBox(scene), hall, scene.sourcePath).probes() <= size_t(kAutoVolumeProbes));
+    CHECK(hall >= 3.125);
+    CHECK(hall < 3.125 * 1.1);
+    // A flat kilometre (a terrain): the probes are counted per axis, one layer high.
+    Scene plain;
+    plain.sourcePath = "plain.gltf";
+    addQuad(plain, "ground", addLambert(plain, vec3(0.5f)), vec3(0, 0, 0), vec3(0, 0, 1000), vec3(1000, 0, 1000),
+            vec3(1000, 0, 0));
+    const VolumeGrid ground = volumeGrid(worldBox(plain), irradianceVolumeSpacing(plain, settings), plain.sourcePath);
+    CHECK(ground.counts.y == 1);
+    CHECK(ground.probes() <= size_t(kAutoVolumeProbes));
+    CHECK(ground.probes() > size_t(kAutoVolumeProbes) / 2);
 }
 
 TEST_CASE("scene.glb carries the irradiance volume, its probes back from the file within the encoding's steps",
@@ -208,8 +331,9 @@ TEST_CASE("scene.glb carries the irradiance volume, its probes back from the fil
     REQUIRE(report.ok);
     REQUIRE(report.volumeProbes.x > 0);
 
-    // The bake's own probes, again (the same bytes at any thread count), against the file's.
+    // The bake's own probes, again on one thread (the same bytes at any thread count), against the file's.
     Diagnostics diagnostics(false, false);
+    const tbb::global_control oneThread(tbb::global_control::max_allowed_parallelism, 1);
     const BakeResult result = bake(loadGltf(job.scenePath), job.settings, diagnostics);
     const IrradianceVolume& baked = result.volume;
     REQUIRE(baked.counts == report.volumeProbes);
@@ -231,6 +355,44 @@ TEST_CASE("scene.glb carries the irradiance volume, its probes back from the fil
                 CHECK(std::abs(read.gradient[p][axis][c] - ratio * read.mean[p][c]) <=
                       (1.0f / 127.0f) * read.mean[p][c] + 1e-6f);
             }
+        }
+    }
+}
+
+TEST_CASE("A malformed irradiance volume in a scene.glb is refused naming the file and the element", "[bake][volume]") {
+    const std::filesystem::path out = test::tempDir("volume-bad");
+    BakeJob job;
+    job.scenePath = test::sourceDir() + "/scenes/cornell_box.gltf";
+    job.outputDir = (out / "box").string();
+    job.settings = volumeSettings(0.25);
+    job.settings.voxel.resolution = 0;
+    const BakeReport report = runBake(job);
+    INFO(report.error);
+    REQUIRE(report.ok);
+    const std::string good = (out / "box" / "scene.glb").string(), bad = (out / "bad.glb").string();
+    using Json = nlohmann::json;
+    const std::vector<std::pair<std::function<void(Json&)>, std::string>> cases = {
+        {[](Json& j) { j["extensions"].erase("VOXLIGHT_irradiance_volume"); }, "no VOXLIGHT_irradiance_volume"},
+        {[](Json& j) { j["extensions"]["VOXLIGHT_irradiance_volume"]["counts"] = {0, 1, 1}; }, "counts"},
+        {[](Json& j) { j["extensions"]["VOXLIGHT_irradiance_volume"]["counts"] = {1e9, 1e9, 1e9}; }, "counts"},
+        {[](Json& j) { j["extensions"]["VOXLIGHT_irradiance_volume"]["spacing"] = {0.1, -1, 0.1}; }, "spacing"},
+        {[](Json& j) { j["extensions"]["VOXLIGHT_irradiance_volume"]["range"] = "four"; }, "range"},
+        {[](Json& j) { j["extensions"]["VOXLIGHT_irradiance_volume"]["irradiance"] = 99; }, "irradiance"},
+        {[](Json& j) { j["extensions"]["VOXLIGHT_irradiance_volume"]["gradient"][1] = j["extensions"]["VOXLIGHT_irradiance_volume"]["valid"]; }, "gradient[1]"},
+        {[](Json& j) { j["extensions"]["VOXLIGHT_irradiance_volume"]["suns"] = {{{"direction", {0, -1}}}}; }, "suns[0].direction"},
+        {[](Json& j) { j["extensions"]["VOXLIGHT_irradiance_volume"]["counts"] = {2, 1, 1}; }, "irradiance is"},
+    };
+    for (const auto& [change, element] : cases) {
+        editGlb(good, bad, change);
+        INFO("expected to name: " << element);
+        try {
+            readIrradianceVolume(bad);
+            FAIL("read without an error");
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            INFO(what);
+            CHECK(what.find(bad) != std::string::npos);
+            CHECK(what.find(element) != std::string::npos);
         }
     }
 }

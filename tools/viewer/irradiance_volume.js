@@ -14,11 +14,12 @@
 // convention E/π, B in world axes), and how much it sees of each sun the file keeps apart
 // (`suns`, up to four). A fragment interpolates these trilinearly over the 8 probes around it,
 // weighing out the probes inside geometry, and turns A and B into E/π with the non-linear
-// reconstruction (Hazel, Geomerics), exact for the L0 and L1 moments and never negative; each
-// sun adds its E·max(0, n·ω)/π times its visibility. The material draws albedo × E/π + emission, times the exposure, through the sRGB
-// curve, clamped, exactly as `voxlight view` draws its baked surfaces: it writes display values
-// itself, so draw it straight to the canvas. For a shader of one's own: IRRADIANCE_VOLUME_GLSL
-// and `volume.uniforms`, then `vec3 volumeIrradiance(vec3 worldPosition, vec3 unitWorldNormal)`.
+// reconstruction (Hazel, Geomerics), which keeps the mean and is never negative; each
+// sun adds its E·max(0, n·ω)/π times its visibility. The material draws albedo × E/π +
+// emission, times the exposure, through the sRGB curve, clamped, exactly as `voxlight view`
+// draws its baked surfaces: it writes display values itself, so draw it straight to the
+// canvas. For a shader of one's own: IRRADIANCE_VOLUME_GLSL and `volume.uniforms`, then
+// `vec3 volumeIrradiance(vec3 worldPosition, vec3 unitWorldNormal)`.
 //
 // The images (RGBM, gradients, validity) are decoded here from the PNG bytes, not through a
 // canvas: a 2D canvas keeps premultiplied colour, which would lose the RGBM texels of small alpha.
