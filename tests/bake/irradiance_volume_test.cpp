@@ -71,6 +71,27 @@ void editGlb(const std::string& from, const std::string& to, Change change) {
     out.write(rest.data(), std::streamsize(rest.size()));
 }
 
+// A black floor 4 m square, a black 1 m block above its centre (1.5 to 2.5 m up), both turned
+// by `turn`, and a sun of E = 3 W/m² travelling along `direction`.
+Scene sunOverBlack(const std::string& name, const glm::mat3& turn, vec3 direction) {
+    Scene scene;
+    scene.sourcePath = name;
+    const int black = addLambert(scene, vec3(0.0f));
+    addQuad(scene, "floor", black, vec3(-2, 0, -2), vec3(-2, 0, 2), vec3(2, 0, 2), vec3(2, 0, -2));
+    addBlock(scene, black, vec3(-0.5f, 1.5f, -0.5f), vec3(0.5f, 2.5f, 0.5f));
+    for (Mesh& mesh : scene.meshes) {
+        for (vec3& p : mesh.positions) p = turn * p;
+        for (vec3& n : mesh.normals) n = turn * n;
+    }
+    Light sun;
+    sun.name = "sun";
+    sun.type = LightType::Directional;
+    sun.direction = direction;
+    sun.intensity = 3.0f;
+    scene.lights.push_back(sun);
+    return scene;
+}
+
 }  // namespace
 
 TEST_CASE("An irradiance volume holds a sun over black surfaces exactly: its visibility 1 in the open and 0 in "
@@ -80,17 +101,7 @@ TEST_CASE("An irradiance volume holds a sun over black surfaces exactly: its vis
     // straight down of E = 3 W/m². Nothing reflects, so the probes' A and B hold nothing and the
     // sun is kept apart: visibility 1 in the open, 0 under the block, and a reader's E/π is
     // E·max(0, n·ω)/π exactly (facing it, across it, away from it).
-    Scene scene;
-    scene.sourcePath = "sun over black (test)";
-    const int black = addLambert(scene, vec3(0.0f));
-    addQuad(scene, "floor", black, vec3(-2, 0, -2), vec3(-2, 0, 2), vec3(2, 0, 2), vec3(2, 0, -2));
-    addBlock(scene, black, vec3(-0.5f, 1.5f, -0.5f), vec3(0.5f, 2.5f, 0.5f));
-    Light sun;
-    sun.name = "sun";
-    sun.type = LightType::Directional;
-    sun.direction = vec3(0.0f, -1.0f, 0.0f);
-    sun.intensity = 3.0f;
-    scene.lights.push_back(sun);
+    const Scene scene = sunOverBlack("sun over black (test)", glm::mat3(1.0f), vec3(0.0f, -1.0f, 0.0f));
     Diagnostics diagnostics(false, false);
     const BakeResult result = bake(scene, volumeSettings(0.5), diagnostics);
     const IrradianceVolume& v = result.volume;
@@ -159,23 +170,10 @@ TEST_CASE("A scene turned 30 degrees about the vertical keeps its volume in the 
     // turned with them. The bake turns the scene into its own frame (the floor's axes); the
     // probes stay on the world's. A probe is in shadow where the ray from it toward the sun
     // crosses the block (the unturned scene's slab test), inside where the block holds it.
-    Scene scene;
-    scene.sourcePath = "turned sun (test)";
-    const int black = addLambert(scene, vec3(0.0f));
-    addQuad(scene, "floor", black, vec3(-2, 0, -2), vec3(-2, 0, 2), vec3(2, 0, 2), vec3(2, 0, -2));
-    addBlock(scene, black, vec3(-0.5f, 1.5f, -0.5f), vec3(0.5f, 2.5f, 0.5f));
     const glm::mat3 turn(glm::rotate(glm::mat4(1.0f), glm::radians(30.0f), vec3(0.0f, 1.0f, 0.0f)));
-    for (Mesh& mesh : scene.meshes) {
-        for (vec3& p : mesh.positions) p = turn * p;
-        for (vec3& n : mesh.normals) n = turn * n;
-    }
     const vec3 unturned = glm::normalize(vec3(std::sin(glm::radians(20.0f)), -std::cos(glm::radians(20.0f)), 0.0f));
-    Light sun;
-    sun.name = "sun";
-    sun.type = LightType::Directional;
-    sun.direction = turn * unturned;
-    sun.intensity = 3.0f;
-    scene.lights.push_back(sun);
+    const Scene scene = sunOverBlack("turned sun (test)", turn, turn * unturned);
+    const Light& sun = scene.lights[0];
     Diagnostics diagnostics(false, false);
     const BakeResult result = bake(scene, volumeSettings(0.25), diagnostics);
     const IrradianceVolume& v = result.volume;
