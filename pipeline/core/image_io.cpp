@@ -118,6 +118,22 @@ std::vector<uint8_t> encodePng8(int width, int height, int channels, const std::
     return png;
 }
 
+namespace {
+
+// The 8-bit texels of an opened image as stored; InputError naming `what`.
+std::vector<uint8_t> readTexels8(OIIO::ImageInput& in, const OIIO::ImageSpec& spec, const std::string& what, int& width,
+                                 int& height, int& channels) {
+    width = spec.width;
+    height = spec.height;
+    channels = spec.nchannels;
+    std::vector<uint8_t> texels(static_cast<size_t>(width) * static_cast<size_t>(height) * static_cast<size_t>(channels));
+    if (!in.read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, texels.data()))
+        throw InputError(what + ": " + in.geterror());
+    return texels;
+}
+
+}  // namespace
+
 std::vector<uint8_t> decodeImage8(const std::vector<uint8_t>& bytes, const std::string& what, int& width, int& height,
                                   int& channels) {
     OIIO::Filesystem::IOMemReader memory(const_cast<uint8_t*>(bytes.data()), bytes.size());
@@ -127,13 +143,7 @@ std::vector<uint8_t> decodeImage8(const std::vector<uint8_t>& bytes, const std::
     OIIO::ImageSpec spec;
     if (!in || !in->set_ioproxy(&memory) || !in->open("memory.png", spec, config))
         throw InputError("cannot decode " + what + ": " + (in ? in->geterror() : OIIO::geterror()));
-    width = spec.width;
-    height = spec.height;
-    channels = spec.nchannels;
-    std::vector<uint8_t> texels(static_cast<size_t>(width) * static_cast<size_t>(height) * static_cast<size_t>(channels));
-    if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, texels.data()))
-        throw InputError("cannot decode " + what + ": " + in->geterror());
-    return texels;
+    return readTexels8(*in, spec, "cannot decode " + what, width, height, channels);
 }
 
 std::vector<uint8_t> readImage8(const std::string& path, int& width, int& height, int& channels) {
@@ -141,14 +151,7 @@ std::vector<uint8_t> readImage8(const std::string& path, int& width, int& height
     config.attribute("oiio:UnassociatedAlpha", 1);
     auto in = OIIO::ImageInput::open(path, &config);
     if (!in) throw InputError("cannot read image " + path + ": " + OIIO::geterror());
-    const OIIO::ImageSpec& spec = in->spec();
-    width = spec.width;
-    height = spec.height;
-    channels = spec.nchannels;
-    std::vector<uint8_t> texels(static_cast<size_t>(width) * static_cast<size_t>(height) * static_cast<size_t>(channels));
-    if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, texels.data()))
-        throw InputError("cannot read image " + path + ": " + in->geterror());
-    return texels;
+    return readTexels8(*in, in->spec(), "cannot read image " + path, width, height, channels);
 }
 
 }  // namespace vl
